@@ -1,0 +1,24 @@
+# Warnings as errors for our own code, and the sanitizer switch (EMF_SANITIZE).
+# Third-party headers are included as SYSTEM so their warnings do not fail our build.
+
+function(emf_set_warnings target)
+  target_compile_options(${target} PRIVATE
+    $<$<COMPILE_LANGUAGE:CXX>:-Wall -Wextra -Wpedantic -Werror -Wshadow -Wnon-virtual-dtor
+                               -Wold-style-cast -Wcast-align -Woverloaded-virtual
+                               -Wno-error=deprecated-declarations>
+    $<$<COMPILE_LANGUAGE:C>:-Wall -Wextra -Wpedantic -Werror>)
+endfunction()
+
+set(EMF_SANITIZE_FLAGS "")
+if(EMF_SANITIZE)
+  if(NOT EMF_SANITIZE MATCHES "^(address,undefined|undefined,address|address|undefined|thread)$")
+    message(FATAL_ERROR "EMF_SANITIZE='${EMF_SANITIZE}': use 'address,undefined' or 'thread'")
+  endif()
+  set(EMF_SANITIZE_FLAGS -fsanitize=${EMF_SANITIZE} -fno-omit-frame-pointer)
+  if(EMF_SANITIZE MATCHES "undefined")
+    list(APPEND EMF_SANITIZE_FLAGS -fno-sanitize-recover=undefined)
+  endif()
+  # Sanitize everything we compile (tests and tools included) so runtime libraries match.
+  add_compile_options(${EMF_SANITIZE_FLAGS})
+  add_link_options(${EMF_SANITIZE_FLAGS})
+endif()

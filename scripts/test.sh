@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# The one test command (README, .ci/run): installs what is missing, builds, runs every test.
+#   1. release build (RelWithDebInfo): the whole suite
+#   2. AddressSanitizer + UndefinedBehaviorSanitizer build: the whole suite except the
+#      long-running integration sequences (label 'slow')
+#   3. ThreadSanitizer build: the frame ring and the runtime threads (label 'threads')
+# Set EMF_TEST_STAGES="release" (or "release asan tsan", the default) to choose.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/install_deps.sh
+
+stages="${EMF_TEST_STAGES:-release asan tsan}"
+jobs="${EMF_JOBS:-$(nproc)}"
+status=0
+for stage in $stages; do
+  echo "=== emf tests: $stage ==="
+  case "$stage" in
+    release)
+      bash scripts/build.sh build -DCMAKE_BUILD_TYPE=RelWithDebInfo
+      (cd build && ctest --output-on-failure -j "$jobs") || status=1
+      ;;
+    asan)
+      bash scripts/build.sh build-asan -DCMAKE_BUILD_TYPE=Debug -DEMF_SANITIZE=address,undefined \
+        -DEMF_BUILD_BENCH=OFF
+      # PoCL's own (unsanitized) runtime keeps allocations until exit: leaks are not ours.
+      (cd build-asan && ASAN_OPTIONS=detect_leaks=0:abort_on_error=0 \
+         UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+         ctest --output-on-failure -j "$jobs" -LE 'slow|install') || status=1
+      ;;
+    tsan)
+      bash scripts/build.sh build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DEMF_SANITIZE=thread \
+        -DEMF_BUILD_BENCH=OFF
+      (cd build-tsan && TSAN_OPTIONS=halt_on_error=1 \
+         ctest --output-on-failure -j "$jobs" -L threads --no-tests=ignore) || status=1
+      ;;
+    *)
+      echo "unknown stage '$stage' (release, asan, tsan)" >&2
+      exit 2
+      ;;
+  esac
+done
+exit $status

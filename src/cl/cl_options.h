@@ -1,0 +1,36 @@
+// Options of the OpenCL runtime (section `cl`).
+#pragma once
+
+#include <string>
+
+#include "common/option_binder.h"
+
+namespace emf::cl {
+
+struct ClOptions {
+  /// Substring of the platform name to prefer ("" = any), case-insensitive.
+  std::string platform;
+  /// Substring of the device name to prefer ("" = any), case-insensitive.
+  std::string device;
+  /// Device type to prefer.
+  std::string device_type = "any";
+  /// Directory of the compiled-program cache ("" = $XDG_CACHE_HOME/emf/kernels or
+  /// ~/.cache/emf/kernels).
+  std::string cache_dir;
+  /// Disable the on-disk program cache (always compile from source).
+  bool disable_cache = false;
+  /// Extra options passed to clBuildProgram for every program.
+  std::string build_options;
+
+  void bind(OptionBinder& b) {
+    b.text("platform", platform, "platform name substring to prefer, case-insensitive");
+    b.text("device", device, "device name substring to prefer, case-insensitive");
+    b.choice("device_type", device_type, {"any", "cpu", "gpu", "accelerator"},
+             "device type to prefer");
+    b.text("cache_dir", cache_dir, "compiled-kernel cache folder");
+    b.boolean("disable_cache", disable_cache, "always compile kernels from source");
+    b.text("build_options", build_options, "extra clBuildProgram options");
+  }
+};
+
+}  // namespace emf::cl

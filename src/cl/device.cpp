@@ -1,0 +1,150 @@
+#include "cl/device.h"
+
+#include <algorithm>
+#include <cctype>
+#include <sstream>
+
+#include "cl/cl_error.h"
+#include "common/log.h"
+
+namespace emf::cl {
+namespace {
+
+std::string platformString(cl_platform_id p, cl_platform_info what) {
+  size_t n = 0;
+  if (clGetPlatformInfo(p, what, 0, nullptr, &n) != CL_SUCCESS || n == 0) return "";
+  std::string s(n, '\0');
+  clGetPlatformInfo(p, what, n, s.data(), nullptr);
+  while (!s.empty() && s.back() == '\0') s.pop_back();
+  return s;
+}
+
+std::string deviceString(cl_device_id d, cl_device_info what) {
+  size_t n = 0;
+  if (clGetDeviceInfo(d, what, 0, nullptr, &n) != CL_SUCCESS || n == 0) return "";
+  std::string s(n, '\0');
+  clGetDeviceInfo(d, what, n, s.data(), nullptr);
+  while (!s.empty() && s.back() == '\0') s.pop_back();
+  return s;
+}
+
+template <typename T>
+T deviceValue(cl_device_id d, cl_device_info what) {
+  T v{};
+  clGetDeviceInfo(d, what, sizeof(T), &v, nullptr);
+  return v;
+}
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+bool contains(const std::string& haystack, const std::string& needle) {
+  return needle.empty() || lower(haystack).find(lower(needle)) != std::string::npos;
+}
+
+}  // namespace
+
+std::string DeviceInfo::describe() const {
+  std::ostringstream os;
+  os << device_name << " [" << type << "] on " << platform_name << " (" << device_version
+     << ", driver " << driver_version << ", " << compute_units << " compute units, "
+     << (global_mem_bytes >> 20) << " MiB)";
+  return os.str();
+}
+
+std::vector<DeviceInfo> listDevices() {
+  std::vector<DeviceInfo> out;
+  cl_uint num_platforms = 0;
+  if (clGetPlatformIDs(0, nullptr, &num_platforms) != CL_SUCCESS || num_platforms == 0) {
+    return out;
+  }
+  std::vector<cl_platform_id> platforms(num_platforms);
+  clGetPlatformIDs(num_platforms, platforms.data(), nullptr);
+  for (cl_platform_id p : platforms) {
+    cl_uint num_devices = 0;
+    if (clGetDeviceIDs(p, CL_DEVICE_TYPE_ALL, 0, nullptr, &num_devices) != CL_SUCCESS) continue;
+    std::vector<cl_device_id> devices(num_devices);
+    clGetDeviceIDs(p, CL_DEVICE_TYPE_ALL, num_devices, devices.data(), nullptr);
+    for (cl_device_id d : devices) {
+      DeviceInfo info;
+      info.platform = p;
+      info.device = d;
+      info.platform_name = platformString(p, CL_PLATFORM_NAME);
+      info.platform_version = platformString(p, CL_PLATFORM_VERSION);
+      info.device_name = deviceString(d, CL_DEVICE_NAME);
+      info.device_version = deviceString(d, CL_DEVICE_VERSION);
+      info.driver_version = deviceString(d, CL_DRIVER_VERSION);
+      const auto type = deviceValue<cl_device_type>(d, CL_DEVICE_TYPE);
+      info.type = (type & CL_DEVICE_TYPE_GPU)           ? "gpu"
+                  : (type & CL_DEVICE_TYPE_CPU)         ? "cpu"
+                  : (type & CL_DEVICE_TYPE_ACCELERATOR) ? "accelerator"
+                                                        : "other";
+      info.compute_units = deviceValue<cl_uint>(d, CL_DEVICE_MAX_COMPUTE_UNITS);
+      info.global_mem_bytes = deviceValue<cl_ulong>(d, CL_DEVICE_GLOBAL_MEM_SIZE);
+      info.max_alloc_bytes = deviceValue<cl_ulong>(d, CL_DEVICE_MAX_MEM_ALLOC_SIZE);
+      info.max_work_group_size = deviceValue<size_t>(d, CL_DEVICE_MAX_WORK_GROUP_SIZE);
+      info.is_pocl = contains(info.platform_name, "portable computing language") ||
+                     contains(info.platform_name, "pocl");
+      out.push_back(info);
+    }
+  }
+  return out;
+}
+
+DeviceSelection selectDevice(const ClOptions& options) {
+  const std::vector<DeviceInfo> devices = listDevices();
+  if (devices.empty()) {
+    throw ClError(CL_DEVICE_NOT_FOUND,
+                  "no OpenCL device found: no ICD is installed or none reports a device; install "
+                  "pocl-opencl-icd (CPU device) or your GPU vendor's OpenCL driver "
+                  "(scripts/install_deps.sh does it)");
+  }
+  const bool has_preference =
+      !options.platform.empty() || !options.device.empty() || options.device_type != "any";
+  for (const DeviceInfo& d : devices) {
+    if (!contains(d.platform_name, options.platform)) continue;
+    if (!contains(d.device_name, options.device)) continue;
+    if (options.device_type != "any" && d.type != options.device_type) continue;
+    DeviceSelection s;
+    s.device = d;
+    s.reason = has_preference ? "matches cl.platform='" + options.platform + "' cl.device='" +
+                                    options.device + "' cl.device_type=" + options.device_type
+                              : "first device (no preference configured)";
+    return s;
+  }
+  // Fallback order: PoCL CPU, any CPU, first device.
+  const DeviceInfo* pick = nullptr;
+  std::string kind;
+  for (const DeviceInfo& d : devices) {
+    if (d.is_pocl && d.type == "cpu") {
+      pick = &d;
+      kind = "PoCL CPU device";
+      break;
+    }
+  }
+  if (!pick) {
+    for (const DeviceInfo& d : devices) {
+      if (d.type == "cpu") {
+        pick = &d;
+        kind = "first CPU device";
+        break;
+      }
+    }
+  }
+  if (!pick) {
+    pick = &devices.front();
+    kind = "first device";
+  }
+  DeviceSelection s;
+  s.device = *pick;
+  s.fallback = true;
+  s.reason = "fallback to the " + kind + ": no device matches cl.platform='" + options.platform +
+             "' cl.device='" + options.device + "' cl.device_type=" + options.device_type;
+  logWarning(s.reason);
+  return s;
+}
+
+}  // namespace emf::cl

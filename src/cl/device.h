@@ -1,0 +1,49 @@
+// OpenCL platform/device enumeration and selection from ClOptions.
+#pragma once
+
+#include <CL/cl.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "cl/cl_options.h"
+
+namespace emf::cl {
+
+struct DeviceInfo {
+  cl_platform_id platform = nullptr;
+  cl_device_id device = nullptr;
+  std::string platform_name;
+  std::string platform_version;
+  std::string device_name;
+  std::string device_version;
+  std::string driver_version;
+  std::string type;  // cpu, gpu, accelerator, other
+  uint32_t compute_units = 0;
+  uint64_t global_mem_bytes = 0;
+  uint64_t max_alloc_bytes = 0;
+  size_t max_work_group_size = 0;
+  bool is_pocl = false;
+
+  /// "PoCL CPU: pthread-skylake... (OpenCL 1.2 ...)".
+  std::string describe() const;
+};
+
+/// All devices of all platforms, in platform then device order. Empty if there is no OpenCL
+/// platform (no ICD installed).
+std::vector<DeviceInfo> listDevices();
+
+struct DeviceSelection {
+  DeviceInfo device;
+  /// Why this device: "matches cl.device='...'" or "fallback: ..." (for `emf info` and logs).
+  std::string reason;
+  bool fallback = false;
+};
+
+/// Picks the first device matching platform/device substrings and type; if none matches, falls
+/// back to PoCL's CPU device (then any CPU, then the first device) with a warning in `reason`.
+/// Throws ClError if there is no OpenCL device at all, saying which package to install.
+DeviceSelection selectDevice(const ClOptions& options);
+
+}  // namespace emf::cl

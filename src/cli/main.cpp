@@ -1,0 +1,68 @@
+// `emf`: the command-line tool. Dispatches to subcommands; every error is a message on stderr
+// and a non-zero exit code (1 = failure, 2 = usage).
+#include <cstdio>
+#include <exception>
+#include <string>
+#include <vector>
+
+#include "cli/arg_parser.h"
+#include "cli/commands.h"
+#include "common/config.h"
+
+namespace {
+
+using emf::cli::Command;
+
+const std::vector<Command>& commands() {
+  static const std::vector<Command> kCommands = {
+      {"info", "version, OpenCL devices (and the selected one), backends, plugin path",
+       emf::cli::cmdInfo},
+      {"version", "print the version", emf::cli::cmdVersion},
+      {"config", "list, check or print configuration keys", emf::cli::cmdConfig},
+  };
+  return kCommands;
+}
+
+void printUsage(FILE* out) {
+  std::fprintf(out, "usage: emf <command> [options]   (emf <command> --help for details)\n\n");
+  std::fprintf(out, "commands:\n");
+  for (const auto& c : commands()) std::fprintf(out, "  %-10s %s\n", c.name, c.summary);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    printUsage(stderr);
+    return emf::cli::kExitUsage;
+  }
+  const std::string name = argv[1];
+  if (name == "--help" || name == "-h" || name == "help") {
+    printUsage(stdout);
+    return emf::cli::kExitOk;
+  }
+  if (name == "--version") return emf::cli::cmdVersion({});
+  const std::vector<std::string> args(argv + 2, argv + argc);
+  for (const auto& c : commands()) {
+    if (name != c.name) continue;
+    try {
+      return c.run(args);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "emf %s: error: %s\n", c.name, e.what());
+      return emf::cli::kExitFailure;
+    }
+  }
+  std::string best;
+  int best_d = 4;
+  for (const auto& c : commands()) {
+    const int d = emf::editDistance(name, c.name);
+    if (d < best_d) {
+      best_d = d;
+      best = c.name;
+    }
+  }
+  std::fprintf(stderr, "emf: unknown command '%s'%s\n\n", name.c_str(),
+               best.empty() ? "" : (" (did you mean '" + best + "'?)").c_str());
+  printUsage(stderr);
+  return emf::cli::kExitUsage;
+}

@@ -1,0 +1,67 @@
+// Options of the E-step (section `em`) and of the object lifecycle (section `objects`).
+// Defaults are METHOD.md's.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "common/option_binder.h"
+
+namespace emf::em {
+
+struct EmOptions {
+  double sigma_m = 0.02;
+  double alpha = 0.8;
+  double p_uniform = 1.0;
+
+  void bind(OptionBinder& b) {
+    b.real("sigma_m", sigma_m, 1e-5, 1.0, "m", "Laplace scale of the SDF residual");
+    b.real("alpha", alpha, 0.0, 1.0, "", "inlier mixture weight");
+    b.real("p_uniform", p_uniform, 0.0, 1e6, "", "uniform outlier likelihood p_U");
+  }
+};
+
+struct ObjectOptions {
+  int min_detection_px = 40;
+  std::vector<std::string> exclude_classes = {
+      "traffic light", "fire hydrant", "stop sign", "parking meter", "bench",
+      "couch",         "potted plant", "bed",       "dining table",  "toilet",
+      "oven",          "sink",         "refrigerator"};
+  bool track_person = false;
+  double match_iou = 0.2;
+  double existence_delete = 0.1;
+  double padding = 2.0;
+  int resolution = 64;
+  double max_create_distance_m = 5.0;
+  double max_volume_iou = 0.5;
+  double max_mask_covered = 0.5;
+  int invisible_min_px = 1600;
+  int visibility_border_px = 20;
+  double min_mean_association = 0.1;
+
+  void bind(OptionBinder& b) {
+    b.integer("min_detection_px", min_detection_px, 0, 10000, "px",
+              "detections with a box side below this are dropped");
+    b.textList("exclude_classes", exclude_classes, "classes that never create objects");
+    b.boolean("track_person", track_person, "track people as objects that are never rendered");
+    b.real("match_iou", match_iou, 0.0, 1.0, "", "min mask IoU to match a detection");
+    b.real("existence_delete", existence_delete, 0.0, 1.0, "",
+           "delete objects with Ex/(Ex+NonEx) below");
+    b.real("padding", padding, 1.0, 10.0, "", "new volume extent / detected extent");
+    b.integer("resolution", resolution, 8, 512, "voxels", "new object volume resolution");
+    b.real("max_create_distance_m", max_create_distance_m, 0.0, 100.0, "m",
+           "objects farther from the camera are not created");
+    b.real("max_volume_iou", max_volume_iou, 0.0, 1.0, "",
+           "no creation if volume IoU with an existing volume is >= this");
+    b.real("max_mask_covered", max_mask_covered, 0.0, 1.0, "",
+           "no creation if this fraction of the mask is covered by objects");
+    b.integer("invisible_min_px", invisible_min_px, 0, 1000000, "px",
+              "objects rendering fewer pixels (inside the border) are deleted");
+    b.integer("visibility_border_px", visibility_border_px, 0, 1000, "px",
+              "image border ignored by the visibility test");
+    b.real("min_mean_association", min_mean_association, 0.0, 1.0, "",
+           "objects whose mean association over their mask is below this are deleted");
+  }
+};
+
+}  // namespace emf::em

@@ -1,0 +1,39 @@
+// Options of the map: the fixed voxel-block pool and the volumes (section `map`).
+#pragma once
+
+#include "common/option_binder.h"
+
+namespace emf::map {
+
+struct MapOptions {
+  /// Size of the one voxel-block pool allocated at start-up (all volumes draw from it).
+  int memory_mb = 256;
+  /// Background voxel edge length.
+  double background_voxel_m = 0.01;
+  /// Background extent in voxels per axis (512 at 1 cm = 5.12 m, as in the paper).
+  int background_resolution = 512;
+  /// Truncation distance in voxels (METHOD.md step 4).
+  double truncation_voxels = 10.0;
+  /// Weight cap W_max.
+  double max_weight = 64.0;
+  /// Integrate free-space voxels with weight 1 whatever the association (authors' code).
+  bool free_space_full_weight = true;
+  /// Initial camera placement: offset of the camera from the background volume centre along
+  /// its viewing axis, as a fraction of the extent (0.5 = centre of one face, looking in).
+  double initial_camera_face_offset = 0.5;
+
+  void bind(OptionBinder& b) {
+    b.integer("memory_mb", memory_mb, 1, 65536, "MiB", "voxel-block pool budget, all volumes");
+    b.real("background_voxel_m", background_voxel_m, 0.001, 0.5, "m", "background voxel size");
+    b.integer("background_resolution", background_resolution, 8, 8192, "voxels",
+              "background extent per axis");
+    b.real("truncation_voxels", truncation_voxels, 1.0, 100.0, "voxels", "TSDF truncation");
+    b.real("max_weight", max_weight, 1.0, 10000.0, "", "TSDF weight cap W_max");
+    b.boolean("free_space_full_weight", free_space_full_weight,
+              "integrate free space with weight 1 regardless of association");
+    b.real("initial_camera_face_offset", initial_camera_face_offset, 0.0, 0.5, "extent",
+           "camera offset from the volume centre along its view axis (0.5 = on a face)");
+  }
+};
+
+}  // namespace emf::map

@@ -1,0 +1,57 @@
+// Options of the detector scheduling (section `detector`), the runtime threads (section
+// `runtime`) and the outputs (section `output`).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "common/option_binder.h"
+
+namespace emf::pipeline {
+
+struct DetectorOptions {
+  /// Plugin name (looked up on the search path) or path to a shared object; "" = none.
+  std::string plugin;
+  /// Configuration string passed to the plugin's create().
+  std::string plugin_config;
+  /// Extra folders searched for plugins (before EMF_PLUGIN_PATH and the install folder).
+  std::vector<std::string> search_path;
+  /// Sequential mode: run the detector on every N-th frame.
+  int every_n_frames = 30;
+  /// sequential (deterministic, datasets) or async (own thread, live sensors).
+  std::string mode = "sequential";
+
+  void bind(OptionBinder& b) {
+    b.text("plugin", plugin, "detector plugin name or path ('' = none)");
+    b.text("plugin_config", plugin_config, "configuration string for the plugin");
+    b.textList("search_path", search_path, "extra plugin folders");
+    b.integer("every_n_frames", every_n_frames, 1, 100000, "frames", "detection interval");
+    b.choice("mode", mode, {"sequential", "async"}, "how the detector runs");
+  }
+};
+
+struct RuntimeOptions {
+  /// Frame ring slots between capture and SLAM.
+  int ring_slots = 4;
+  /// drop_oldest (live) or block (replay, lossless).
+  std::string ring_policy = "block";
+
+  void bind(OptionBinder& b) {
+    b.integer("ring_slots", ring_slots, 2, 1024, "frames", "frame ring capacity");
+    b.choice("ring_policy", ring_policy, {"drop_oldest", "block"}, "frame ring policy");
+  }
+};
+
+struct OutputOptions {
+  /// Write binary (true) or ASCII (false) PLY meshes.
+  bool binary_ply = true;
+  /// Write per-frame PNG overlays of object masks and association maps.
+  bool write_images = false;
+
+  void bind(OptionBinder& b) {
+    b.boolean("binary_ply", binary_ply, "binary PLY meshes (false = ASCII)");
+    b.boolean("write_images", write_images, "per-frame PNG overlays and association maps");
+  }
+};
+
+}  // namespace emf::pipeline

@@ -1,0 +1,216 @@
+// The OpenCL runtime on the CI device (PoCL CPU): selection, kernel path vs CPU reference,
+// the on-disk program cache, build errors with logs.
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <random>
+
+#include "cl/embedded_kernels.h"
+#include "cl/image_scale.h"
+#include "test_support.h"
+
+namespace emf::cl {
+namespace {
+
+// Float affine maps are exact up to one rounding per operation (a*v+b may be fused).
+constexpr float kScaleRelTolerance = 2e-7f;
+
+class ClRuntime : public test::WithClQueue {};
+
+TEST_F(ClRuntime, DefaultSelectionIsPoclCpuInCi) {
+  // CI has only PoCL; a developer machine with a GPU selects its first device instead.
+  if (listDevices().size() == 1) {
+    EXPECT_TRUE(ctx().device().is_pocl) << ctx().device().describe();
+    EXPECT_EQ(ctx().device().type, "cpu");
+  }
+  EXPECT_FALSE(ctx().device().device_name.empty());
+}
+
+TEST(ClSelection, UnmatchedPreferenceFallsBackToPoclCpu) {
+  ClOptions o;
+  o.device = "no-such-device-xyz";
+  const DeviceSelection s = selectDevice(o);
+  EXPECT_TRUE(s.fallback);
+  EXPECT_NE(s.reason.find("no-such-device-xyz"), std::string::npos) << s.reason;
+  bool have_pocl_cpu = false;
+  for (const auto& d : listDevices()) have_pocl_cpu |= d.is_pocl && d.type == "cpu";
+  if (have_pocl_cpu) {
+    EXPECT_TRUE(s.device.is_pocl);
+    EXPECT_NE(s.reason.find("PoCL CPU"), std::string::npos) << s.reason;
+  }
+}
+
+TEST(ClSelection, SubstringAndTypeMatch) {
+  const auto devices = listDevices();
+  ASSERT_FALSE(devices.empty());
+  ClOptions o;
+  o.device = devices.back().device_name.substr(0, 4);
+  o.device_type = devices.back().type == "other" ? "any" : devices.back().type;
+  const DeviceSelection s = selectDevice(o);
+  EXPECT_FALSE(s.fallback) << s.reason;
+  EXPECT_NE(s.device.device_name.find(o.device), std::string::npos);
+}
+
+TEST(ClErrors, NamesAndMessages) {
+  EXPECT_STREQ(errorName(CL_INVALID_VALUE), "CL_INVALID_VALUE");
+  EXPECT_STREQ(errorName(CL_BUILD_PROGRAM_FAILURE), "CL_BUILD_PROGRAM_FAILURE");
+  EXPECT_STREQ(errorName(-12345), "CL_UNKNOWN_ERROR");
+  try {
+    EMF_CL_CHECK(CL_OUT_OF_RESOURCES);
+    FAIL();
+  } catch (const ClError& e) {
+    EXPECT_EQ(e.code(), CL_OUT_OF_RESOURCES);
+    EXPECT_NE(std::string(e.what()).find("CL_OUT_OF_RESOURCES (-5)"), std::string::npos);
+  }
+}
+
+TEST_F(ClRuntime, ScaleImageMatchesCpuReference) {
+  const int n = 640 * 480 + 13;  // not a multiple of the work-group size
+  std::vector<float> in(n);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.f, 65535.f);
+  for (int i = 0; i < n; ++i) in[i] = (i % 97 == 0) ? std::numeric_limits<float>::quiet_NaN() : u(rng);
+  const float a = 1.0f / 5000.0f, b = 0.25f;
+  MemHandle din = ctx().buffer(CL_MEM_READ_ONLY, n * sizeof(float), in.data());
+  MemHandle dout = ctx().buffer(CL_MEM_WRITE_ONLY, n * sizeof(float));
+  scaleImage(ctx(), din, dout, n, a, b);
+  std::vector<float> out(n);
+  ctx().read(dout, out.data(), n * sizeof(float));
+  const std::vector<float> ref = scaleImageReference(in, a, b);
+  int nan_count = 0;
+  for (int i = 0; i < n; ++i) {
+    if (std::isnan(ref[i])) {
+      ASSERT_TRUE(std::isnan(out[i])) << "pixel " << i << " must stay invalid";
+      ++nan_count;
+      continue;
+    }
+    ASSERT_NEAR(out[i], ref[i], kScaleRelTolerance * std::abs(ref[i]) + 1e-7f) << "pixel " << i;
+  }
+  EXPECT_EQ(nan_count, (n + 96) / 97);
+}
+
+TEST_F(ClRuntime, EveryEmbeddedKernelBuilds) {
+  ASSERT_FALSE(embeddedKernels().empty());
+  for (const KernelSource* k : embeddedKernels()) {
+    EXPECT_NO_THROW(ctx().program(k->name)) << k->name;
+    EXPECT_EQ(std::string(k->sha256).size(), 64u) << k->name;
+  }
+}
+
+TEST_F(ClRuntime, IncludesAreInlinedAtEmbedTime) {
+  const KernelSource* k = findEmbeddedKernel("image_scale");
+  ASSERT_NE(k, nullptr);
+  EXPECT_NE(std::string(k->source).find("emf_is_valid(float v)"), std::string::npos);
+  EXPECT_EQ(std::string(k->source).find("#include \"common.clh\""), std::string::npos);
+}
+
+TEST(ProgramCacheTest, SecondContextLoadsFromDisk) {
+  const std::string dir = test::tempDir("clcache");
+  ClOptions o;
+  o.cache_dir = dir;
+  {
+    Context first(o);
+    first.program("image_scale");
+    const auto s = first.cacheStats();
+    EXPECT_EQ(s.compiled, 1);
+    EXPECT_EQ(s.disk_hits, 0);
+    EXPECT_EQ(s.stored, 1);
+    first.program("image_scale");
+    EXPECT_EQ(first.cacheStats().memory_hits, 1);
+  }
+  Context second(o);
+  second.program("image_scale");
+  EXPECT_EQ(second.cacheStats().disk_hits, 1);
+  EXPECT_EQ(second.cacheStats().compiled, 0);
+  // Different build options are a different cache entry.
+  second.program("image_scale", "-DEMF_TEST_OPTION=1");
+  EXPECT_EQ(second.cacheStats().compiled, 1);
+  const KernelSource* k = findEmbeddedKernel("image_scale");
+  EXPECT_NE(second.cacheKey(k->sha256, "-cl-std=CL1.2"),
+            second.cacheKey(k->sha256, "-cl-std=CL1.2 -DX"));
+}
+
+TEST(ProgramCacheTest, CorruptEntryIsRecompiled) {
+  const std::string dir = test::tempDir("clcache-corrupt");
+  ClOptions o;
+  o.cache_dir = dir;
+  std::string path;
+  {
+    Context first(o);
+    first.program("image_scale");
+    const KernelSource* k = findEmbeddedKernel("image_scale");
+    path = first.cache().pathFor(first.cacheKey(k->sha256, "-cl-std=CL1.2"));
+  }
+  ASSERT_TRUE(std::filesystem::exists(path));
+  { std::ofstream(path, std::ios::trunc) << "garbage"; }
+  Context second(o);
+  EXPECT_NO_THROW(second.program("image_scale"));
+  EXPECT_EQ(second.cacheStats().compiled, 1);
+  EXPECT_EQ(second.cacheStats().stored, 1);  // repaired
+}
+
+TEST(ProgramCacheTest, UnusableCacheDirStillBuilds) {
+  const std::string dir = test::tempDir("clcache-file");
+  const std::string not_a_dir = dir + "/file";
+  { std::ofstream(not_a_dir) << "x"; }
+  ClOptions o;
+  o.cache_dir = not_a_dir + "/sub";  // cannot be created: a file is in the way
+  Context ctx(o);
+  EXPECT_NO_THROW(ctx.program("image_scale"));
+  EXPECT_EQ(ctx.cacheStats().compiled, 1);
+  EXPECT_EQ(ctx.cacheStats().stored, 0);
+}
+
+TEST(ProgramCacheTest, DisabledCacheNeverTouchesDisk) {
+  const std::string dir = test::tempDir("clcache-off");
+  ClOptions o;
+  o.cache_dir = dir;
+  o.disable_cache = true;
+  Context ctx(o);
+  ctx.program("image_scale");
+  EXPECT_TRUE(std::filesystem::is_empty(dir));
+}
+
+TEST_F(ClRuntime, BuildErrorCarriesBuildLog) {
+  try {
+    ctx().program("image_scale", "-DEMF_FORCE_ERROR -Dfloat=this_is_not_a_type");
+    FAIL() << "expected a build failure";
+  } catch (const ClError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(e.code(), CL_BUILD_PROGRAM_FAILURE) << what;
+    EXPECT_NE(what.find("kernels_cl/image_scale.cl"), std::string::npos) << what;
+    EXPECT_NE(what.find("build log:"), std::string::npos) << what;
+    EXPECT_NE(what.find("this_is_not_a_type"), std::string::npos) << what;
+  }
+}
+
+TEST_F(ClRuntime, UnknownKernelFileIsAClearError) {
+  try {
+    ctx().program("no_such_stage");
+    FAIL();
+  } catch (const ClError& e) {
+    EXPECT_NE(std::string(e.what()).find("kernels_cl/no_such_stage.cl"), std::string::npos);
+  }
+}
+
+TEST_F(ClRuntime, RaiiHandlesRetainAndRelease) {
+  MemHandle a = ctx().buffer(CL_MEM_READ_WRITE, 64);
+  cl_uint refs = 0;
+  ASSERT_CL_SUCCESS(clGetMemObjectInfo(a.get(), CL_MEM_REFERENCE_COUNT, sizeof(refs), &refs, nullptr));
+  EXPECT_EQ(refs, 1u);
+  {
+    MemHandle b = a;  // copy retains
+    ASSERT_CL_SUCCESS(
+        clGetMemObjectInfo(a.get(), CL_MEM_REFERENCE_COUNT, sizeof(refs), &refs, nullptr));
+    EXPECT_EQ(refs, 2u);
+  }
+  ASSERT_CL_SUCCESS(clGetMemObjectInfo(a.get(), CL_MEM_REFERENCE_COUNT, sizeof(refs), &refs, nullptr));
+  EXPECT_EQ(refs, 1u);
+  MemHandle c = std::move(a);
+  EXPECT_FALSE(a);  // NOLINT(bugprone-use-after-move): moved-from is empty by contract
+  EXPECT_TRUE(c);
+}
+
+}  // namespace
+}  // namespace emf::cl

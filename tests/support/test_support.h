@@ -1,0 +1,56 @@
+// Shared test helpers: data paths, OpenCL fixtures and assertion macros.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <string>
+
+#include "cl/cl_error.h"
+#include "cl/context.h"
+
+namespace emf::test {
+
+/// ../shared/data/<name> (or $EMF_DATA_DIR/<name>). Fails the test when it does not exist.
+std::string dataPath(const std::string& name);
+/// A fresh empty temporary folder, removed at process exit.
+std::string tempDir(const std::string& tag);
+/// Runs a shell command, returns its exit code and puts stdout+stderr into *output.
+int runCommand(const std::string& command, std::string* output);
+
+/// A test with an OpenCL context on the selected device (PoCL CPU in CI). Shared across the
+/// tests of one process; never skipped: a missing device is a failure.
+class WithClContext : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite();
+  static void TearDownTestSuite();
+  cl::Context& ctx() { return *ctx_; }
+  cl_context context() { return ctx_->context(); }
+
+  static std::unique_ptr<cl::Context> ctx_;
+};
+
+/// WithClContext plus its queue.
+class WithClQueue : public WithClContext {
+ protected:
+  cl_command_queue queue() { return ctx_->queue(); }
+};
+
+}  // namespace emf::test
+
+/// Asserts that an OpenCL call returned CL_SUCCESS, printing the error's name otherwise.
+#define ASSERT_CL_SUCCESS(expr)                                                         \
+  do {                                                                                  \
+    const cl_int emf_cl_err_ = (expr);                                                  \
+    ASSERT_EQ(emf_cl_err_, CL_SUCCESS) << #expr << " returned "                         \
+                                       << ::emf::cl::errorName(emf_cl_err_) << " ("     \
+                                       << emf_cl_err_ << ")";                           \
+  } while (0)
+
+#define EXPECT_CL_SUCCESS(expr)                                                         \
+  do {                                                                                  \
+    const cl_int emf_cl_err_ = (expr);                                                  \
+    EXPECT_EQ(emf_cl_err_, CL_SUCCESS) << #expr << " returned "                         \
+                                       << ::emf::cl::errorName(emf_cl_err_) << " ("     \
+                                       << emf_cl_err_ << ")";                           \
+  } while (0)
