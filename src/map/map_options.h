@@ -28,7 +28,7 @@ struct MapOptions {
     b.integer("background_resolution", background_resolution, 8, 8192, "voxels",
               "background extent per axis");
     b.real("truncation_voxels", truncation_voxels, 1.0, 100.0, "voxels", "TSDF truncation");
-    b.real("max_weight", max_weight, 1.0, 10000.0, "", "TSDF weight cap W_max");
+    b.real("max_weight", max_weight, 1.0, 127.0, "", "TSDF weight cap W_max (storage limit 127)");
     b.boolean("free_space_full_weight", free_space_full_weight,
               "integrate free space with weight 1 regardless of association");
     b.real("initial_camera_face_offset", initial_camera_face_offset, 0.0, 0.5, "extent",

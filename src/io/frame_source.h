@@ -1,0 +1,38 @@
+// The one interface every frame source implements: datasets (tum:, cofusion:, klg:), the
+// synthetic world (synth:) and live sensors (openni2:, v4l2:). The pipeline cannot tell replay
+// from live.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "io/frame.h"
+#include "io/source_options.h"
+
+namespace emf::io {
+
+class FrameSource {
+ public:
+  virtual ~FrameSource() = default;
+  /// Intrinsics of the depth image (valid after construction).
+  virtual Intrinsics intrinsics() const = 0;
+  /// Reads the next frame into `frame`. Returns false at the end of a recorded source. Throws
+  /// IoError naming the file/line/frame on unreadable or inconsistent input.
+  virtual bool next(Frame& frame) = 0;
+  /// Number of frames if known (recorded sources), else -1.
+  virtual int64_t size() const { return -1; }
+  /// True for live sensors (frames arrive in real time; drop_oldest makes sense).
+  virtual bool isLive() const { return false; }
+  /// Human-readable description ("TUM folder /data/x, 300 frames").
+  virtual std::string describe() const = 0;
+  /// Releases the device/files. Also done by the destructor.
+  virtual void close() {}
+};
+
+/// Opens a source from a URI: `tum:<dir>`, `cofusion:<dir>`, `klg:<file>`,
+/// `synth:<preset>[?frames=N&seed=S]`, `openni2:[<uri>]`, `v4l2:/dev/videoN[,/dev/videoM]`.
+/// Query parameters (`?depth_scale=1000&fx=585`) override `options`. Throws IoError for an
+/// unknown scheme or unreadable input, naming what to fix.
+std::unique_ptr<FrameSource> openSource(const std::string& uri, const SourceOptions& options);
+
+}  // namespace emf::io
