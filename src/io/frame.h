@@ -21,7 +21,19 @@ struct Intrinsics {
 
   bool valid() const { return fx > 0 && fy > 0 && width > 0 && height > 0; }
   /// Same camera at another resolution (scales focal lengths and principal point).
-  Intrinsics scaled(int new_width, int new_height) const;
+  Intrinsics scaled(int new_width, int new_height) const {
+    Intrinsics k = *this;
+    const double sx = static_cast<double>(new_width) / width;
+    const double sy = static_cast<double>(new_height) / height;
+    k.fx = fx * sx;
+    k.fy = fy * sy;
+    // Pixel centres: x_new + 0.5 = (x_old + 0.5) * s.
+    k.cx = (cx + 0.5) * sx - 0.5;
+    k.cy = (cy + 0.5) * sy - 0.5;
+    k.width = new_width;
+    k.height = new_height;
+    return k;
+  }
 };
 
 /// One instance from a detector (or from a dataset's masks/ folder).
