@@ -5,6 +5,7 @@
 
 #include "cl/cl_error.h"
 #include "common/error.h"
+#include "common/status_name.h"
 
 namespace emf::capi {
 namespace {
@@ -52,12 +53,13 @@ emf_status translateCurrentException(const char* function) {
 
 emf_status checkStruct(const void* ptr, size_t struct_size, size_t min_size, const char* name,
                        const char* function) {
-  if (!ptr) return fail(EMF_ERROR_INVALID_ARGUMENT, std::string(function) + ": " + name + " is NULL");
+  if (!ptr)
+    return fail(EMF_ERROR_INVALID_ARGUMENT, std::string(function) + ": " + name + " is NULL");
   if (struct_size < min_size) {
-    return fail(EMF_ERROR_INVALID_ARGUMENT,
-                std::string(function) + ": " + name + "->struct_size is " +
-                    std::to_string(struct_size) + ", expected at least " +
-                    std::to_string(min_size) + " (set it to sizeof(" + name + "))");
+    return fail(EMF_ERROR_INVALID_ARGUMENT, std::string(function) + ": " + name +
+                                                "->struct_size is " + std::to_string(struct_size) +
+                                                ", expected at least " + std::to_string(min_size) +
+                                                " (set it to sizeof(" + name + "))");
   }
   return EMF_OK;
 }
@@ -68,24 +70,7 @@ extern "C" {
 
 EMF_API const char* emf_last_error_message(void) { return emf::capi::lastError(); }
 
-EMF_API const char* emf_status_string(emf_status status) {
-  switch (status) {
-    case EMF_OK: return "EMF_OK";
-    case EMF_ERROR_INVALID_ARGUMENT: return "EMF_ERROR_INVALID_ARGUMENT";
-    case EMF_ERROR_VERSION_MISMATCH: return "EMF_ERROR_VERSION_MISMATCH";
-    case EMF_ERROR_CONFIG: return "EMF_ERROR_CONFIG";
-    case EMF_ERROR_IO: return "EMF_ERROR_IO";
-    case EMF_ERROR_OPENCL: return "EMF_ERROR_OPENCL";
-    case EMF_ERROR_OUT_OF_MEMORY: return "EMF_ERROR_OUT_OF_MEMORY";
-    case EMF_ERROR_NOT_FOUND: return "EMF_ERROR_NOT_FOUND";
-    case EMF_ERROR_DEVICE: return "EMF_ERROR_DEVICE";
-    case EMF_ERROR_STATE: return "EMF_ERROR_STATE";
-    case EMF_ERROR_TIMEOUT: return "EMF_ERROR_TIMEOUT";
-    case EMF_ERROR_END_OF_STREAM: return "EMF_ERROR_END_OF_STREAM";
-    case EMF_ERROR_INTERNAL: return "EMF_ERROR_INTERNAL";
-  }
-  return "EMF_STATUS_UNKNOWN";
-}
+EMF_API const char* emf_status_string(emf_status status) { return emf::statusName(status); }
 
 EMF_API uint32_t emf_version(void) { return EMF_VERSION; }
 

@@ -38,11 +38,11 @@ EMF_API emf_status emf_system_create(const emf_system_options* options, emf_syst
         "emf_system_options", "emf_system_create");
     if (s != EMF_OK) return s;
     if (!apiVersionSupported(options->api_version)) {
-      return emf::capi::fail(
-          EMF_ERROR_VERSION_MISMATCH,
-          "emf_system_create: caller compiled against API " +
-              std::to_string(options->api_version) + ", library is " +
-              std::to_string(EMF_VERSION) + " (same major, minor <= library's required)");
+      return emf::capi::fail(EMF_ERROR_VERSION_MISMATCH,
+                             "emf_system_create: caller compiled against API " +
+                                 std::to_string(options->api_version) + ", library is " +
+                                 std::to_string(EMF_VERSION) +
+                                 " (same major, minor <= library's required)");
     }
     auto sys = std::make_unique<emf_system>();
     if (options->config_file) sys->config = emf::Config::loadFile(options->config_file);
@@ -68,9 +68,9 @@ EMF_API emf_status emf_system_get_info(const emf_system* system, emf_system_info
     if (!system) {
       return emf::capi::fail(EMF_ERROR_INVALID_ARGUMENT, "emf_system_get_info: system is NULL");
     }
-    const emf_status s = emf::capi::checkStruct(info, info ? info->struct_size : 0,
-                                                sizeof(emf_system_info), "emf_system_info",
-                                                "emf_system_get_info");
+    const emf_status s =
+        emf::capi::checkStruct(info, info ? info->struct_size : 0, sizeof(emf_system_info),
+                               "emf_system_info", "emf_system_get_info");
     if (s != EMF_OK) return s;
     const auto& d = system->cl->device();
     copyString(info->device_name, sizeof(info->device_name), d.device_name);

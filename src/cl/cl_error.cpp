@@ -76,8 +76,8 @@ const char* errorName(cl_int code) {
 
 void check(cl_int code, const char* what) {
   if (code == CL_SUCCESS) return;
-  throw ClError(code, std::string(what) + " failed: " + errorName(code) + " (" +
-                          std::to_string(code) + ")");
+  throw ClError(
+      code, std::string(what) + " failed: " + errorName(code) + " (" + std::to_string(code) + ")");
 }
 
 void check(cl_int code, const std::string& what) { check(code, what.c_str()); }

@@ -25,8 +25,7 @@ Context::Context(const ClOptions& options)
       cache_(options.cache_dir, !options.disable_cache) {
   cl_int err = CL_SUCCESS;
   const cl_context_properties props[] = {
-      CL_CONTEXT_PLATFORM, reinterpret_cast<cl_context_properties>(selection_.device.platform),
-      0};
+      CL_CONTEXT_PLATFORM, reinterpret_cast<cl_context_properties>(selection_.device.platform), 0};
   cl_device_id dev = selection_.device.device;
   context_ = ContextHandle(clCreateContext(props, 1, &dev, nullptr, nullptr, &err));
   check(err, "clCreateContext(" + selection_.device.device_name + ")");
@@ -94,8 +93,8 @@ ProgramHandle Context::build(const std::string& file, const std::string& options
     const unsigned char* bin_ptr = binary.data();
     const size_t bin_len = binary.size();
     cl_int bin_status = CL_SUCCESS;
-    ProgramHandle p(clCreateProgramWithBinary(context_.get(), 1, &dev, &bin_len, &bin_ptr,
-                                              &bin_status, &err));
+    ProgramHandle p(
+        clCreateProgramWithBinary(context_.get(), 1, &dev, &bin_len, &bin_ptr, &bin_status, &err));
     if (err == CL_SUCCESS && bin_status == CL_SUCCESS &&
         clBuildProgram(p.get(), 1, &dev, options.c_str(), nullptr, nullptr) == CL_SUCCESS) {
       ++stats_.disk_hits;
@@ -112,10 +111,9 @@ ProgramHandle Context::build(const std::string& file, const std::string& options
   check(err, "clCreateProgramWithSource(kernels_cl/" + file + ".cl)");
   err = clBuildProgram(p.get(), 1, &dev, options.c_str(), nullptr, nullptr);
   if (err != CL_SUCCESS) {
-    throw ClError(err, "building kernels_cl/" + file + ".cl for " +
-                           selection_.device.device_name + " with options '" + options +
-                           "' failed: " + errorName(err) + " (" + std::to_string(err) +
-                           ")\nbuild log:\n" + buildLog(p.get(), dev));
+    throw ClError(err, "building kernels_cl/" + file + ".cl for " + selection_.device.device_name +
+                           " with options '" + options + "' failed: " + errorName(err) + " (" +
+                           std::to_string(err) + ")\nbuild log:\n" + buildLog(p.get(), dev));
   }
   ++stats_.compiled;
   logDebug("kernels_cl/", file, ".cl: compiled from source");
@@ -148,22 +146,22 @@ KernelHandle Context::kernel(const std::string& file, const std::string& kernel_
 MemHandle Context::buffer(cl_mem_flags flags, size_t bytes, const void* host) const {
   cl_int err = CL_SUCCESS;
   if (host) flags |= CL_MEM_COPY_HOST_PTR;
-  MemHandle m(clCreateBuffer(context_.get(), flags, bytes == 0 ? 1 : bytes,
-                             const_cast<void*>(host), &err));
+  MemHandle m(
+      clCreateBuffer(context_.get(), flags, bytes == 0 ? 1 : bytes, const_cast<void*>(host), &err));
   check(err, "clCreateBuffer(" + std::to_string(bytes) + " bytes)");
   return m;
 }
 
 void Context::write(const MemHandle& mem, const void* host, size_t bytes, size_t offset) const {
   if (bytes == 0) return;
-  EMF_CL_CHECK(
-      clEnqueueWriteBuffer(queue_.get(), mem.get(), CL_TRUE, offset, bytes, host, 0, nullptr, nullptr));
+  EMF_CL_CHECK(clEnqueueWriteBuffer(queue_.get(), mem.get(), CL_TRUE, offset, bytes, host, 0,
+                                    nullptr, nullptr));
 }
 
 void Context::read(const MemHandle& mem, void* host, size_t bytes, size_t offset) const {
   if (bytes == 0) return;
-  EMF_CL_CHECK(
-      clEnqueueReadBuffer(queue_.get(), mem.get(), CL_TRUE, offset, bytes, host, 0, nullptr, nullptr));
+  EMF_CL_CHECK(clEnqueueReadBuffer(queue_.get(), mem.get(), CL_TRUE, offset, bytes, host, 0,
+                                   nullptr, nullptr));
 }
 
 void Context::finish() const { EMF_CL_CHECK(clFinish(queue_.get())); }
@@ -180,9 +178,8 @@ void enqueue(cl_command_queue q, const KernelHandle& k, size_t gx, size_t gy, si
     }
   }
   if (gx == 0 || (dims >= 2 && gy == 0)) return;  // nothing to do
-  const cl_int err =
-      clEnqueueNDRangeKernel(q, k.get(), dims, nullptr, global, use_local ? local : nullptr, 0,
-                             nullptr, nullptr);
+  const cl_int err = clEnqueueNDRangeKernel(q, k.get(), dims, nullptr, global,
+                                            use_local ? local : nullptr, 0, nullptr, nullptr);
   if (err != CL_SUCCESS) check(err, "clEnqueueNDRangeKernel(" + kernelName(k.get()) + ")");
 }
 

@@ -41,8 +41,7 @@ ProgramCache::ProgramCache(std::string dir, bool enabled)
 
 std::string ProgramCache::pathFor(const std::string& key) const {
   char name[32];
-  std::snprintf(name, sizeof(name), "%016llx.bin",
-                static_cast<unsigned long long>(fnv1a64(key)));
+  std::snprintf(name, sizeof(name), "%016llx.bin", static_cast<unsigned long long>(fnv1a64(key)));
   return (fs::path(dir_) / name).string();
 }
 

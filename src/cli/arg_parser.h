@@ -20,8 +20,8 @@ class ArgParser {
   void flag(const std::string& name, bool* value, const std::string& help);
   void option(const std::string& name, std::string* value, const std::string& meta,
               const std::string& help);
-  void repeated(const std::string& name, std::vector<std::string>* values,
-                const std::string& meta, const std::string& help);
+  void repeated(const std::string& name, std::vector<std::string>* values, const std::string& meta,
+                const std::string& help);
   void positional(const std::string& name, std::string* value, const std::string& help,
                   bool required = true);
 

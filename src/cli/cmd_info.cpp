@@ -73,9 +73,10 @@ int cmdInfo(const std::vector<std::string>& args) {
     const double ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     const auto s = ctx.cacheStats();
-    std::printf("kernels: %zu files built in %.0f ms: %d loaded from cache, %d compiled from "
-                "source (%d stored)\n",
-                cl::embeddedKernels().size(), ms, s.disk_hits, s.compiled, s.stored);
+    std::printf(
+        "kernels: %zu files built in %.0f ms: %d loaded from cache, %d compiled from "
+        "source (%d stored)\n",
+        cl::embeddedKernels().size(), ms, s.disk_hits, s.compiled, s.stored);
   }
   return kExitOk;
 }

@@ -19,5 +19,4 @@ int cmdInfo(const std::vector<std::string>& args);
 int cmdVersion(const std::vector<std::string>& args);
 int cmdConfig(const std::vector<std::string>& args);
 
-
 }  // namespace emf::cli

@@ -80,12 +80,11 @@ class YamlReadBinder : public OptionBinder {
     long long v = 0;
     std::string unit_text = (unit && *unit) ? std::string(" ") + unit : "";
     if (!n.IsScalar() || !YAML::convert<long long>::decode(n, v)) {
-      fail(n, key,
-           "expected an integer in " + rangeText(lo, hi) + unit_text + ", got " + show(n));
+      fail(n, key, "expected an integer in " + rangeText(lo, hi) + unit_text + ", got " + show(n));
     }
     if (v < lo || v > hi) {
-      fail(n, key, "value " + std::to_string(v) + " is out of range " + rangeText(lo, hi) +
-                       unit_text);
+      fail(n, key,
+           "value " + std::to_string(v) + " is out of range " + rangeText(lo, hi) + unit_text);
     }
     value = static_cast<int>(v);
   }
@@ -200,9 +199,8 @@ class ValidateBinder : public OptionBinder {
   }
   void integer(const char* key, int& v, int lo, int hi, const char* unit, const char*) override {
     if (v < lo || v > hi) {
-      throw ConfigError(name_ + "." + key + ": value " + std::to_string(v) +
-                        " is out of range " + rangeText(lo, hi) +
-                        ((unit && *unit) ? std::string(" ") + unit : ""));
+      throw ConfigError(name_ + "." + key + ": value " + std::to_string(v) + " is out of range " +
+                        rangeText(lo, hi) + ((unit && *unit) ? std::string(" ") + unit : ""));
     }
   }
   void boolean(const char*, bool&, const char*) override {}
@@ -250,8 +248,8 @@ class ListBinder : public OptionBinder {
   }
 
  private:
-  void add(const char* key, const char* type, std::string range, const char* unit,
-           const char* doc, std::string def) {
+  void add(const char* key, const char* type, std::string range, const char* unit, const char* doc,
+           std::string def) {
     out_->push_back(
         {name_, key, type, std::move(range), unit ? unit : "", doc ? doc : "", std::move(def)});
   }
@@ -352,8 +350,9 @@ Config Config::loadString(const std::string& yaml, const std::string& origin) {
 Config Config::loadFile(const std::string& path) {
   std::ifstream in(path);
   if (!in) {
-    throw ConfigError(path + ": cannot open the configuration file (check the path; presets "
-                             "live in conf/)");
+    throw ConfigError(path +
+                      ": cannot open the configuration file (check the path; presets "
+                      "live in conf/)");
   }
   std::stringstream ss;
   ss << in.rdbuf();

@@ -63,7 +63,7 @@ struct Config {
 struct OptionInfo {
   std::string section;
   std::string key;
-  std::string type;  // real, integer, boolean, text, choice, list
+  std::string type;   // real, integer, boolean, text, choice, list
   std::string range;  // "[lo, hi]" or "a|b|c" or ""
   std::string unit;
   std::string doc;

@@ -24,8 +24,8 @@ struct EmOptions {
 struct ObjectOptions {
   int min_detection_px = 40;
   std::vector<std::string> exclude_classes = {
-      "traffic light", "fire hydrant", "stop sign", "parking meter", "bench",
-      "couch",         "potted plant", "bed",       "dining table",  "toilet",
+      "traffic light", "fire hydrant", "stop sign",   "parking meter", "bench",
+      "couch",         "potted plant", "bed",         "dining table",  "toilet",
       "oven",          "sink",         "refrigerator"};
   bool track_person = false;
   double match_iou = 0.2;

@@ -11,8 +11,8 @@ namespace emf::map {
 
 constexpr int kBlockSize = 8;                                       // voxels per block edge
 constexpr int kBlockVoxels = kBlockSize * kBlockSize * kBlockSize;  // 512
-constexpr float kTsdfScale = 32767.0f;   // TSDF/truncation in [-1, 1] -> int16
-constexpr float kWeightScale = 256.0f;   // weight -> int16 (max 127.99)
+constexpr float kTsdfScale = 32767.0f;  // TSDF/truncation in [-1, 1] -> int16
+constexpr float kWeightScale = 256.0f;  // weight -> int16 (max 127.99)
 constexpr float kMaxStorableWeight = 32767.0f / kWeightScale;
 
 /// One voxel as stored in the pool (OpenCL short2).
@@ -34,9 +34,9 @@ static_assert(sizeof(Voxel) == 4, "Voxel must match OpenCL short2");
 
 /// Read-only host view of one volume: its index grid and the pool's voxel array.
 struct VolumeHostView {
-  const int32_t* index = nullptr;     // dims.x * dims.y * dims.z entries, -1 = unallocated
+  const int32_t* index = nullptr;  // dims.x * dims.y * dims.z entries, -1 = unallocated
   Eigen::Vector3i dims_blocks{0, 0, 0};
-  const Voxel* voxels = nullptr;      // the pool's voxels (slot * kBlockVoxels + local)
+  const Voxel* voxels = nullptr;  // the pool's voxels (slot * kBlockVoxels + local)
   float voxel_size_m = 0.01f;
   float truncation_m = 0.1f;
 

@@ -70,7 +70,8 @@ TEST_F(ClRuntime, ScaleImageMatchesCpuReference) {
   std::vector<float> in(n);
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> u(0.f, 65535.f);
-  for (int i = 0; i < n; ++i) in[i] = (i % 97 == 0) ? std::numeric_limits<float>::quiet_NaN() : u(rng);
+  for (int i = 0; i < n; ++i)
+    in[i] = (i % 97 == 0) ? std::numeric_limits<float>::quiet_NaN() : u(rng);
   const float a = 1.0f / 5000.0f, b = 0.25f;
   MemHandle din = ctx().buffer(CL_MEM_READ_ONLY, n * sizeof(float), in.data());
   MemHandle dout = ctx().buffer(CL_MEM_WRITE_ONLY, n * sizeof(float));
@@ -197,7 +198,8 @@ TEST_F(ClRuntime, UnknownKernelFileIsAClearError) {
 TEST_F(ClRuntime, RaiiHandlesRetainAndRelease) {
   MemHandle a = ctx().buffer(CL_MEM_READ_WRITE, 64);
   cl_uint refs = 0;
-  ASSERT_CL_SUCCESS(clGetMemObjectInfo(a.get(), CL_MEM_REFERENCE_COUNT, sizeof(refs), &refs, nullptr));
+  ASSERT_CL_SUCCESS(
+      clGetMemObjectInfo(a.get(), CL_MEM_REFERENCE_COUNT, sizeof(refs), &refs, nullptr));
   EXPECT_EQ(refs, 1u);
   {
     MemHandle b = a;  // copy retains
@@ -205,7 +207,8 @@ TEST_F(ClRuntime, RaiiHandlesRetainAndRelease) {
         clGetMemObjectInfo(a.get(), CL_MEM_REFERENCE_COUNT, sizeof(refs), &refs, nullptr));
     EXPECT_EQ(refs, 2u);
   }
-  ASSERT_CL_SUCCESS(clGetMemObjectInfo(a.get(), CL_MEM_REFERENCE_COUNT, sizeof(refs), &refs, nullptr));
+  ASSERT_CL_SUCCESS(
+      clGetMemObjectInfo(a.get(), CL_MEM_REFERENCE_COUNT, sizeof(refs), &refs, nullptr));
   EXPECT_EQ(refs, 1u);
   MemHandle c = std::move(a);
   EXPECT_FALSE(a);  // NOLINT(bugprone-use-after-move): moved-from is empty by contract

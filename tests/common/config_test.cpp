@@ -1,10 +1,11 @@
+#include "common/config.h"
+
 #include <yaml-cpp/yaml.h>
 
 #include <filesystem>
 #include <fstream>
 #include <set>
 
-#include "common/config.h"
 #include "common/error.h"
 #include "test_support.h"
 

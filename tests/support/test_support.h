@@ -39,18 +39,18 @@ class WithClQueue : public WithClContext {
 }  // namespace emf::test
 
 /// Asserts that an OpenCL call returned CL_SUCCESS, printing the error's name otherwise.
-#define ASSERT_CL_SUCCESS(expr)                                                         \
-  do {                                                                                  \
-    const cl_int emf_cl_err_ = (expr);                                                  \
-    ASSERT_EQ(emf_cl_err_, CL_SUCCESS) << #expr << " returned "                         \
-                                       << ::emf::cl::errorName(emf_cl_err_) << " ("     \
-                                       << emf_cl_err_ << ")";                           \
+#define ASSERT_CL_SUCCESS(expr)                                                              \
+  do {                                                                                       \
+    const cl_int emf_cl_err_ = (expr);                                                       \
+    ASSERT_EQ(emf_cl_err_, CL_SUCCESS)                                                       \
+        << #expr << " returned " << ::emf::cl::errorName(emf_cl_err_) << " (" << emf_cl_err_ \
+        << ")";                                                                              \
   } while (0)
 
-#define EXPECT_CL_SUCCESS(expr)                                                         \
-  do {                                                                                  \
-    const cl_int emf_cl_err_ = (expr);                                                  \
-    EXPECT_EQ(emf_cl_err_, CL_SUCCESS) << #expr << " returned "                         \
-                                       << ::emf::cl::errorName(emf_cl_err_) << " ("     \
-                                       << emf_cl_err_ << ")";                           \
+#define EXPECT_CL_SUCCESS(expr)                                                              \
+  do {                                                                                       \
+    const cl_int emf_cl_err_ = (expr);                                                       \
+    EXPECT_EQ(emf_cl_err_, CL_SUCCESS)                                                       \
+        << #expr << " returned " << ::emf::cl::errorName(emf_cl_err_) << " (" << emf_cl_err_ \
+        << ")";                                                                              \
   } while (0)
