@@ -1,0 +1,195 @@
+#include "em/object_rules.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace emf::em {
+
+DetectionUse detectionUse(const io::Detection& d, const ObjectOptions& options) {
+  if (d.box.width < options.min_detection_px || d.box.height < options.min_detection_px) {
+    return DetectionUse::kTooSmall;
+  }
+  if (d.class_name == "person" && !options.track_person) return DetectionUse::kPersonIgnored;
+  return DetectionUse::kUse;
+}
+
+bool classMayCreate(const std::string& class_name, const ObjectOptions& options) {
+  return std::find(options.exclude_classes.begin(), options.exclude_classes.end(), class_name) ==
+         options.exclude_classes.end();
+}
+
+double maskIoU(const cv::Mat& a, const cv::Mat& b) {
+  CV_Assert(a.size() == b.size());
+  cv::Mat ma = a != 0, mb = b != 0;
+  const double inter = cv::countNonZero(ma & mb);
+  const double uni = cv::countNonZero(ma | mb);
+  return uni > 0 ? inter / uni : 0.0;
+}
+
+std::vector<int> matchByIoU(const std::vector<std::vector<double>>& iou, double threshold) {
+  const size_t rows = iou.size();
+  const size_t cols = rows ? iou[0].size() : 0;
+  std::vector<int> match(rows, -1);
+  std::vector<bool> col_used(cols, false);
+  for (;;) {
+    double best = -1;
+    size_t br = 0, bc = 0;
+    for (size_t r = 0; r < rows; ++r) {
+      if (match[r] >= 0) continue;
+      for (size_t c = 0; c < cols; ++c) {
+        if (col_used[c] || iou[r][c] < threshold) continue;
+        if (iou[r][c] > best) {
+          best = iou[r][c];
+          br = r;
+          bc = c;
+        }
+      }
+    }
+    if (best < 0) break;
+    match[br] = static_cast<int>(bc);
+    col_used[bc] = true;
+  }
+  return match;
+}
+
+namespace {
+double percentile(std::vector<double> v, double p) {
+  // Linear interpolation between closest ranks (numpy's default).
+  std::sort(v.begin(), v.end());
+  const double pos = p * (v.size() - 1);
+  const size_t lo = static_cast<size_t>(std::floor(pos));
+  const size_t hi = std::min(lo + 1, v.size() - 1);
+  return v[lo] + (v[hi] - v[lo]) * (pos - lo);
+}
+}  // namespace
+
+VolumePlacement placeObject(const std::vector<Eigen::Vector3d>& points_world,
+                            const ObjectOptions& options) {
+  VolumePlacement out;
+  out.resolution = options.resolution;
+  if (points_world.size() < 10) return out;
+  double max_extent = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    std::vector<double> c;
+    c.reserve(points_world.size());
+    for (const auto& p : points_world) c.push_back(p[axis]);
+    const double lo = percentile(c, 0.1), hi = percentile(c, 0.9);
+    out.centre_world[axis] = 0.5 * (lo + hi);
+    max_extent = std::max(max_extent, hi - lo);
+  }
+  out.extent_m = max_extent * options.padding;
+  out.voxel_size_m = out.extent_m / options.resolution;
+  return out;
+}
+
+double boxIoU(const OrientedBox& a, const OrientedBox& b, int n) {
+  auto inside = [](const OrientedBox& box, const Eigen::Vector3d& p_world) {
+    const Eigen::Vector3d p = box.T_world_box.inverse() * p_world;
+    return (p.array() >= 0).all() && (p.array() <= box.size_m.array()).all();
+  };
+  auto fractionInside = [&](const OrientedBox& from, const OrientedBox& to) {
+    int count = 0;
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j)
+        for (int k = 0; k < n; ++k) {
+          const Eigen::Vector3d u((i + 0.5) / n, (j + 0.5) / n, (k + 0.5) / n);
+          if (inside(to, from.T_world_box * Eigen::Vector3d(u.cwiseProduct(from.size_m)))) ++count;
+        }
+    return static_cast<double>(count) / (static_cast<double>(n) * n * n);
+  };
+  const double va = a.size_m.prod(), vb = b.size_m.prod();
+  if (va <= 0 || vb <= 0) return 0;
+  // Estimate the intersection from both sides and average (symmetric in a and b).
+  const double inter = 0.5 * (fractionInside(a, b) * va + fractionInside(b, a) * vb);
+  return inter / (va + vb - inter);
+}
+
+double maskCoveredFraction(const cv::Mat& detection_mask, const cv::Mat& object_ids) {
+  CV_Assert(detection_mask.size() == object_ids.size());
+  cv::Mat m = detection_mask > 0;
+  const int total = cv::countNonZero(m);
+  if (total == 0) return 0;
+  cv::Mat covered = m & (object_ids > 0);
+  return static_cast<double>(cv::countNonZero(covered)) / total;
+}
+
+bool mayCreate(const io::Detection& d, const VolumePlacement& placement,
+               const Eigen::Vector3d& camera_position_world,
+               const std::vector<OrientedBox>& existing_volumes, const cv::Mat& object_ids,
+               const ObjectOptions& options, std::string* reason) {
+  auto fail = [&](const std::string& why) {
+    if (reason) *reason = why;
+    return false;
+  };
+  if (!classMayCreate(d.class_name, options)) return fail("class on objects.exclude_classes");
+  if (placement.extent_m <= 0) return fail("too few valid depth points in the mask");
+  if ((placement.centre_world - camera_position_world).norm() > options.max_create_distance_m) {
+    return fail("centre farther than objects.max_create_distance_m");
+  }
+  OrientedBox candidate;
+  candidate.size_m = Eigen::Vector3d::Constant(placement.extent_m);
+  candidate.T_world_box.translation() =
+      placement.centre_world - Eigen::Vector3d::Constant(0.5 * placement.extent_m);
+  for (const auto& v : existing_volumes) {
+    if (boxIoU(candidate, v) >= options.max_volume_iou) {
+      return fail("volume IoU with an existing volume >= objects.max_volume_iou");
+    }
+  }
+  if (!object_ids.empty() && maskCoveredFraction(d.mask, object_ids) > options.max_mask_covered) {
+    return fail("mask already covered by objects beyond objects.max_mask_covered");
+  }
+  if (reason) reason->clear();
+  return true;
+}
+
+namespace {
+cv::Mat idMask(const cv::Mat& object_ids, int object_id) {
+  cv::Mat ids;
+  object_ids.convertTo(ids, CV_32S);
+  return ids == object_id;
+}
+}  // namespace
+
+int visiblePixels(const cv::Mat& object_ids, int object_id, const ObjectOptions& options) {
+  const int b = options.visibility_border_px;
+  if (object_ids.cols <= 2 * b || object_ids.rows <= 2 * b) return 0;
+  const cv::Rect inner(b, b, object_ids.cols - 2 * b, object_ids.rows - 2 * b);
+  return cv::countNonZero(idMask(object_ids(inner), object_id));
+}
+
+bool isInvisible(const cv::Mat& object_ids, int object_id, const ObjectOptions& options) {
+  return visiblePixels(object_ids, object_id, options) < options.invisible_min_px;
+}
+
+double meanAssociation(const cv::Mat& q, const cv::Mat& object_ids, int object_id) {
+  CV_Assert(q.type() == CV_32F && q.size() == object_ids.size());
+  const cv::Mat m = idMask(object_ids, object_id);
+  const int n = cv::countNonZero(m);
+  if (n == 0) return 0;
+  cv::Mat weights;
+  m.convertTo(weights, CV_32F, 1.0 / 255.0);
+  return cv::sum(q.mul(weights))[0] / n;
+}
+
+GrowPlan planGrowth(const std::vector<Eigen::Vector3d>& points_volume,
+                    const Eigen::Vector3i& dims_blocks, double voxel_size_m, int block_voxels,
+                    int max_blocks_per_side) {
+  GrowPlan plan;
+  const double block_m = voxel_size_m * block_voxels;
+  for (const auto& p : points_volume) {
+    for (int a = 0; a < 3; ++a) {
+      const double hi_m = dims_blocks[a] * block_m;
+      if (p[a] < 0) {
+        plan.add_low[a] = std::max(plan.add_low[a], static_cast<int>(std::ceil(-p[a] / block_m)));
+      } else if (p[a] >= hi_m) {
+        plan.add_high[a] =
+            std::max(plan.add_high[a], static_cast<int>(std::floor((p[a] - hi_m) / block_m)) + 1);
+      }
+    }
+  }
+  plan.add_low = plan.add_low.cwiseMin(max_blocks_per_side);
+  plan.add_high = plan.add_high.cwiseMin(max_blocks_per_side);
+  return plan;
+}
+
+}  // namespace emf::em

@@ -1,0 +1,98 @@
+// The object lifecycle rules of METHOD.md steps 5-6 as pure functions on masks, boxes and point
+// sets, so each rule is testable on a constructed case. The pipeline (src/pipeline/) applies
+// them with the ray-cast object masks and the association maps of the current frame.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "em/em_options.h"
+#include "io/frame.h"
+
+namespace emf::em {
+
+/// Why a detection is not used.
+enum class DetectionUse { kUse, kTooSmall, kPersonIgnored };
+
+/// Step 5, first bullet: detections whose box is narrower or lower than min_detection_px are
+/// dropped; "person" is dropped unless objects.track_person. (Excluded classes are kept here:
+/// they may still match existing objects but never create one, see mayCreate().)
+DetectionUse detectionUse(const io::Detection& d, const ObjectOptions& options);
+
+/// True if the class may create a new object (not on objects.exclude_classes).
+bool classMayCreate(const std::string& class_name, const ObjectOptions& options);
+
+/// IoU of two masks (non-zero = inside). Same size required. 0 when both are empty.
+double maskIoU(const cv::Mat& a, const cv::Mat& b);
+
+/// Greedy one-to-one association of detections (rows) to objects (columns) by IoU: repeatedly
+/// take the largest remaining IoU >= threshold. Returns, per detection, the column or -1.
+std::vector<int> matchByIoU(const std::vector<std::vector<double>>& iou, double threshold);
+
+/// Existence counts of an object (step 5): Ex counts matched detection frames, NonEx unmatched.
+struct Existence {
+  double ex = 1.0;  // the creating detection counts once
+  double non_ex = 0.0;
+  double probability() const { return ex / (ex + non_ex); }
+  /// True when the object must be deleted (probability below objects.existence_delete).
+  bool shouldDelete(const ObjectOptions& o) const { return probability() < o.existence_delete; }
+};
+
+/// An axis-aligned cube of voxels placed in the world (the initial object volume).
+struct VolumePlacement {
+  Eigen::Vector3d centre_world = Eigen::Vector3d::Zero();
+  double extent_m = 0;      // edge length
+  double voxel_size_m = 0;  // extent / resolution
+  int resolution = 0;       // voxels per edge
+};
+
+/// Step 5, creation geometry: 10th/90th percentiles of the masked points per axis give centre
+/// and extent; the largest axis extent times objects.padding is the cube's edge; resolution
+/// objects.resolution. Points in the world frame. Needs >= 10 points (else extent 0).
+VolumePlacement placeObject(const std::vector<Eigen::Vector3d>& points_world,
+                            const ObjectOptions& options);
+
+/// An oriented box: the volume [0, size] in its own frame, placed by T_world_box.
+struct OrientedBox {
+  Eigen::Isometry3d T_world_box = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d size_m = Eigen::Vector3d::Zero();
+};
+
+/// Volumetric IoU of two oriented boxes, estimated by sampling each box on an n^3 grid of cell
+/// centres (exact for axis-aligned boxes whose faces fall on the grid; error ~1/n otherwise).
+double boxIoU(const OrientedBox& a, const OrientedBox& b, int n = 24);
+
+/// Fraction of the detection mask's pixels already covered by a rendered object (object_ids
+/// CV_32S or CV_16U, > 0 = some object). 0 for an empty mask.
+double maskCoveredFraction(const cv::Mat& detection_mask, const cv::Mat& object_ids);
+
+/// All creation checks of step 5 for one unmatched detection. `reason` says which failed.
+bool mayCreate(const io::Detection& d, const VolumePlacement& placement,
+               const Eigen::Vector3d& camera_position_world,
+               const std::vector<OrientedBox>& existing_volumes, const cv::Mat& object_ids,
+               const ObjectOptions& options, std::string* reason);
+
+/// Step 6: pixels of an object's rendered mask inside the image shrunk by
+/// objects.visibility_border_px; invisible when below objects.invisible_min_px.
+int visiblePixels(const cv::Mat& object_ids, int object_id, const ObjectOptions& options);
+bool isInvisible(const cv::Mat& object_ids, int object_id, const ObjectOptions& options);
+
+/// Step 6: mean association q_i over the object's rendered mask (q CV_32F); deleted when below
+/// objects.min_mean_association. Returns 0 for an empty mask.
+double meanAssociation(const cv::Mat& q, const cv::Mat& object_ids, int object_id);
+
+/// Step 5, growing: whole blocks (block_voxels per block) to add on the low and high side of
+/// each axis so that every point (volume frame, metres; volume spans [0, dims*block*voxel]) lies
+/// inside. Growth per side is capped at `max_blocks_per_side`.
+struct GrowPlan {
+  Eigen::Vector3i add_low = Eigen::Vector3i::Zero();
+  Eigen::Vector3i add_high = Eigen::Vector3i::Zero();
+  bool any() const { return (add_low.array() > 0).any() || (add_high.array() > 0).any(); }
+};
+GrowPlan planGrowth(const std::vector<Eigen::Vector3d>& points_volume,
+                    const Eigen::Vector3i& dims_blocks, double voxel_size_m, int block_voxels,
+                    int max_blocks_per_side);
+
+}  // namespace emf::em

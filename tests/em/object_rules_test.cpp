@@ -1,0 +1,187 @@
+// Each lifecycle rule of METHOD.md steps 5-6 on a constructed case.
+#include "em/object_rules.h"
+
+#include <cmath>
+#include <random>
+
+#include "test_support.h"
+
+namespace emf::em {
+namespace {
+
+constexpr double kIoUGridTolerance = 0.02;  // boxIoU sampling error at n = 24
+
+io::Detection detection(const std::string& cls, cv::Rect box, cv::Size image = {640, 480}) {
+  io::Detection d;
+  d.class_name = cls;
+  d.score = 0.9f;
+  d.box = box;
+  d.mask = cv::Mat::zeros(image, CV_32F);
+  d.mask(box).setTo(1.f);
+  return d;
+}
+
+TEST(ObjectRules, SizeFilterUsesBothSides) {
+  ObjectOptions o;  // 40 px
+  EXPECT_EQ(detectionUse(detection("cup", {0, 0, 40, 40}), o), DetectionUse::kUse);
+  EXPECT_EQ(detectionUse(detection("cup", {0, 0, 39, 100}), o), DetectionUse::kTooSmall);
+  EXPECT_EQ(detectionUse(detection("cup", {0, 0, 100, 39}), o), DetectionUse::kTooSmall);
+}
+
+TEST(ObjectRules, PersonOnlyWhenConfigured) {
+  ObjectOptions o;
+  EXPECT_EQ(detectionUse(detection("person", {0, 0, 80, 200}), o), DetectionUse::kPersonIgnored);
+  o.track_person = true;
+  EXPECT_EQ(detectionUse(detection("person", {0, 0, 80, 200}), o), DetectionUse::kUse);
+}
+
+TEST(ObjectRules, ExcludeListBlocksCreationOnly) {
+  ObjectOptions o;
+  EXPECT_FALSE(classMayCreate("refrigerator", o));
+  EXPECT_FALSE(classMayCreate("dining table", o));
+  EXPECT_TRUE(classMayCreate("teddy bear", o));
+  EXPECT_EQ(detectionUse(detection("refrigerator", {0, 0, 100, 100}), o), DetectionUse::kUse);
+}
+
+TEST(ObjectRules, MaskIoU) {
+  cv::Mat a = cv::Mat::zeros(10, 10, CV_8U), b = cv::Mat::zeros(10, 10, CV_8U);
+  a(cv::Rect(0, 0, 4, 5)).setTo(1);  // 20 px
+  b(cv::Rect(2, 0, 4, 5)).setTo(1);  // 20 px, overlap 10
+  EXPECT_DOUBLE_EQ(maskIoU(a, b), 10.0 / 30.0);
+  EXPECT_DOUBLE_EQ(maskIoU(a, a), 1.0);
+  EXPECT_DOUBLE_EQ(maskIoU(cv::Mat::zeros(3, 3, CV_8U), cv::Mat::zeros(3, 3, CV_8U)), 0.0);
+}
+
+TEST(ObjectRules, GreedyMatchingTakesLargestIoUAboveThreshold) {
+  // det0 overlaps obj0 (0.5) and obj1 (0.6); det1 overlaps obj1 (0.7); det2 only 0.15.
+  const std::vector<std::vector<double>> iou = {{0.5, 0.6}, {0.0, 0.7}, {0.15, 0.0}};
+  const std::vector<int> m = matchByIoU(iou, 0.2);
+  EXPECT_EQ(m[1], 1);   // the best pair first
+  EXPECT_EQ(m[0], 0);   // then det0 takes the remaining object
+  EXPECT_EQ(m[2], -1);  // below threshold: unmatched, may create
+  EXPECT_TRUE(matchByIoU({}, 0.2).empty());
+}
+
+TEST(ObjectRules, ExistenceProbabilityAndDeletion) {
+  ObjectOptions o;  // delete below 0.1
+  Existence e;      // created by one detection
+  EXPECT_DOUBLE_EQ(e.probability(), 1.0);
+  for (int i = 0; i < 9; ++i) e.non_ex += 1;  // 1 / 10 = 0.1: kept
+  EXPECT_DOUBLE_EQ(e.probability(), 0.1);
+  EXPECT_FALSE(e.shouldDelete(o));
+  e.non_ex += 1;  // 1 / 11 < 0.1: deleted
+  EXPECT_TRUE(e.shouldDelete(o));
+}
+
+TEST(ObjectRules, PlacementFromPercentilesWithPadding) {
+  // Uniform points in a 0.2 x 0.1 x 0.05 box centred at (1, 2, 3): the 10th-90th percentile
+  // range is 80% of each side, so the edge is 0.8 * 0.2 * padding 2 = 0.32 m.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-0.5, 0.5);
+  std::vector<Eigen::Vector3d> pts;
+  for (int i = 0; i < 20000; ++i) {
+    pts.emplace_back(1 + 0.2 * u(rng), 2 + 0.1 * u(rng), 3 + 0.05 * u(rng));
+  }
+  ObjectOptions o;
+  const VolumePlacement p = placeObject(pts, o);
+  EXPECT_NEAR(p.centre_world.x(), 1.0, 2e-3);
+  EXPECT_NEAR(p.centre_world.y(), 2.0, 2e-3);
+  EXPECT_NEAR(p.centre_world.z(), 3.0, 2e-3);
+  EXPECT_NEAR(p.extent_m, 0.32, 3e-3);
+  EXPECT_EQ(p.resolution, 64);
+  EXPECT_NEAR(p.voxel_size_m, 0.32 / 64, 1e-4);
+  EXPECT_EQ(placeObject({{0, 0, 0}}, o).extent_m, 0.0);
+}
+
+TEST(ObjectRules, BoxIoU) {
+  OrientedBox a, b;
+  a.size_m = b.size_m = Eigen::Vector3d(1, 1, 1);
+  EXPECT_NEAR(boxIoU(a, b), 1.0, 1e-12);
+  b.T_world_box.translation() = Eigen::Vector3d(0.5, 0, 0);  // overlap 0.5: IoU 1/3
+  EXPECT_NEAR(boxIoU(a, b), 1.0 / 3.0, kIoUGridTolerance);
+  b.T_world_box.translation() = Eigen::Vector3d(2, 0, 0);
+  EXPECT_DOUBLE_EQ(boxIoU(a, b), 0.0);
+  // Rotated by 90 deg about the box's own centre: same region.
+  OrientedBox c = a;
+  c.T_world_box = Eigen::Translation3d(0.5, 0.5, 0.5) *
+                  Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()) *
+                  Eigen::Translation3d(-0.5, -0.5, -0.5);
+  EXPECT_NEAR(boxIoU(a, c), 1.0, kIoUGridTolerance);
+}
+
+TEST(ObjectRules, CreationChecks) {
+  ObjectOptions o;
+  io::Detection d = detection("cup", {100, 100, 100, 100});
+  VolumePlacement p;
+  p.centre_world = Eigen::Vector3d(0, 0, 2);
+  p.extent_m = 0.4;
+  p.voxel_size_m = 0.4 / 64;
+  p.resolution = 64;
+  const Eigen::Vector3d cam(0, 0, 0);
+  cv::Mat ids = cv::Mat::zeros(480, 640, CV_32S);
+  std::string why;
+  EXPECT_TRUE(mayCreate(d, p, cam, {}, ids, o, &why)) << why;
+
+  VolumePlacement far = p;
+  far.centre_world.z() = 5.5;
+  EXPECT_FALSE(mayCreate(d, far, cam, {}, ids, o, &why));
+  EXPECT_NE(why.find("max_create_distance_m"), std::string::npos);
+
+  OrientedBox same;  // the same cube already exists
+  same.size_m = Eigen::Vector3d::Constant(0.4);
+  same.T_world_box.translation() = p.centre_world - Eigen::Vector3d::Constant(0.2);
+  EXPECT_FALSE(mayCreate(d, p, cam, {same}, ids, o, &why));
+  EXPECT_NE(why.find("volume IoU"), std::string::npos);
+  OrientedBox shifted = same;  // overlap 1/3 < 0.5: allowed
+  shifted.T_world_box.translation().x() += 0.2;
+  EXPECT_TRUE(mayCreate(d, p, cam, {shifted}, ids, o, &why)) << why;
+
+  ids(cv::Rect(100, 100, 60, 100)).setTo(3);  // 60% of the mask covered by object 3
+  EXPECT_FALSE(mayCreate(d, p, cam, {}, ids, o, &why));
+  EXPECT_NE(why.find("covered"), std::string::npos);
+  ids.setTo(0);
+  ids(cv::Rect(100, 100, 40, 100)).setTo(3);  // 40%: allowed
+  EXPECT_TRUE(mayCreate(d, p, cam, {}, ids, o, &why)) << why;
+
+  EXPECT_FALSE(mayCreate(detection("oven", {100, 100, 100, 100}), p, cam, {}, ids, o, &why));
+  EXPECT_NE(why.find("exclude_classes"), std::string::npos);
+}
+
+TEST(ObjectRules, VisibilityIgnoresBorder) {
+  ObjectOptions o;  // 1600 px inside the image shrunk by 20 px
+  cv::Mat ids = cv::Mat::zeros(480, 640, CV_16U);
+  ids(cv::Rect(0, 0, 60, 60)).setTo(2);  // 3600 px, but only 40x40 = 1600 inside the border
+  EXPECT_EQ(visiblePixels(ids, 2, o), 1600);
+  EXPECT_FALSE(isInvisible(ids, 2, o));
+  ids.setTo(0);
+  ids(cv::Rect(0, 0, 59, 60)).setTo(2);  // 39 x 40 = 1560 inside
+  EXPECT_EQ(visiblePixels(ids, 2, o), 1560);
+  EXPECT_TRUE(isInvisible(ids, 2, o));
+  EXPECT_TRUE(isInvisible(ids, 7, o));  // not rendered at all
+}
+
+TEST(ObjectRules, MeanAssociationOverMask) {
+  cv::Mat ids = cv::Mat::zeros(10, 10, CV_32S);
+  ids(cv::Rect(0, 0, 5, 2)).setTo(1);  // 10 px
+  cv::Mat q = cv::Mat::zeros(10, 10, CV_32F);
+  q(cv::Rect(0, 0, 5, 1)).setTo(0.3f);  // 5 px at 0.3
+  q(cv::Rect(0, 1, 5, 1)).setTo(0.1f);  // 5 px at 0.1
+  q(cv::Rect(5, 5, 5, 5)).setTo(1.0f);  // outside the mask: ignored
+  EXPECT_NEAR(meanAssociation(q, ids, 1), 0.2, 1e-6);
+  EXPECT_EQ(meanAssociation(q, ids, 4), 0.0);
+}
+
+TEST(ObjectRules, GrowthInWholeBlocks) {
+  // 8 x 8 x 8 blocks of 8 voxels of 1 cm: the volume spans [0, 0.64) m per axis.
+  const Eigen::Vector3i dims(8, 8, 8);
+  std::vector<Eigen::Vector3d> pts = {{0.1, 0.1, 0.1}, {0.63, 0.5, 0.5}};
+  EXPECT_FALSE(planGrowth(pts, dims, 0.01, 8, 4).any());
+  pts.push_back({-0.01, 0.5, 0.70});      // 1 cm below x: 1 block; 6 cm above z: 1 block
+  pts.push_back({0.5, 0.5 + 0.64, 0.5});  // 0.50 m beyond y: 7 blocks, capped at 4
+  const GrowPlan g = planGrowth(pts, dims, 0.01, 8, 4);
+  EXPECT_EQ(g.add_low, Eigen::Vector3i(1, 0, 0));
+  EXPECT_EQ(g.add_high, Eigen::Vector3i(0, 4, 1));
+}
+
+}  // namespace
+}  // namespace emf::em
