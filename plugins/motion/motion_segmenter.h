@@ -1,0 +1,55 @@
+// The `motion` detector's segmentation: regions of the depth image that the SLAM's current
+// models explain badly (high background SDF residual, low background association), bounded by
+// depth discontinuities and seen in consecutive calls. Needs no trained model.
+#pragma once
+
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+namespace emf_motion {
+
+struct MotionOptions {
+  double strong_residual_m = 0.04;  // seed pixels: |psi_background| above this
+  double weak_residual_m = 0.015;   // growth pixels: above this (hysteresis)
+  double max_association = 0.5;     // pixels with q_0 above this are explained by the background
+  double depth_jump_m = 0.03;       // + depth_jump_rel * depth: a discontinuity between neighbours
+  double depth_jump_rel = 0.03;
+  int min_area_px = 1600;          // smaller regions are noise
+  double max_area_fraction = 0.4;  // a larger region means the camera tracking failed
+  int min_consecutive = 2;         // calls a region must persist before it is reported
+  double persist_iou = 0.2;        // overlap linking a region to the previous call's
+  int open_radius_px = 2;          // morphological opening of the seed mask
+
+  /// Parses "key=value,key=value" (keys as above). Returns false and sets *error on bad input.
+  bool parse(const std::string& config, std::string* error);
+};
+
+struct MotionRegion {
+  cv::Mat mask;  // CV_8U 0/1, image size
+  cv::Rect box;
+  float score = 0;  // fraction of strong-residual pixels in the region
+  int age = 1;      // consecutive calls this region has been seen
+};
+
+class MotionSegmenter {
+ public:
+  explicit MotionSegmenter(const MotionOptions& options) : options_(options) {}
+
+  /// One call: depth CV_32F metres (NaN/0 invalid), residual CV_32F |psi| metres (NaN = the map
+  /// has no value), association CV_32F q_0 or empty. Returns the regions persistent for
+  /// min_consecutive calls.
+  std::vector<MotionRegion> update(const cv::Mat& depth, const cv::Mat& residual,
+                                   const cv::Mat& association);
+
+  /// Candidate regions of the last call (persistent or not), for tests and debugging.
+  const std::vector<MotionRegion>& candidates() const { return previous_; }
+
+ private:
+  std::vector<MotionRegion> segment(const cv::Mat& depth, const cv::Mat& residual,
+                                    const cv::Mat& association) const;
+  MotionOptions options_;
+  std::vector<MotionRegion> previous_;
+};
+
+}  // namespace emf_motion
