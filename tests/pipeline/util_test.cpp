@@ -1,0 +1,37 @@
+#include "pipeline/progress.h"
+#include "pipeline/stage_timer.h"
+#include "test_support.h"
+
+namespace emf::pipeline {
+namespace {
+
+TEST(StageTimer, MedianP90AndTotal) {
+  StageTimer t({"track", "integrate"}, 16);
+  for (int i = 1; i <= 10; ++i) {
+    t.add("track", i);
+    t.add("integrate", 2 * i);
+    t.add("integrate", 1);  // accumulates within a frame
+    t.endFrame();
+  }
+  const auto s = t.summary();
+  EXPECT_DOUBLE_EQ(s.at("track").median_ms, 5.5);
+  EXPECT_DOUBLE_EQ(s.at("track").p90_ms, 9.0);  // nearest rank: ceil(0.9 * 10) = 9th
+  EXPECT_DOUBLE_EQ(s.at("track").max_ms, 10.0);
+  EXPECT_DOUBLE_EQ(s.at("integrate").mean_ms, 12.0);
+  EXPECT_DOUBLE_EQ(s.at("total").median_ms, 3 * 5.5 + 1);
+  EXPECT_EQ(s.at("total").count, 10);
+  EXPECT_THROW(t.add("nope", 1), InvalidArgument);
+}
+
+TEST(StageTimer, SummaryOfOddAndEmpty) {
+  EXPECT_DOUBLE_EQ(summarize({3, 1, 2}).median_ms, 2.0);
+  EXPECT_EQ(summarize({}).count, 0);
+}
+
+TEST(ProgressLine, FormatsRateAndEta) {
+  EXPECT_EQ(Progress::format(50, 300, 10.0, ""), "frame 50/300  5.0 frames/s  ETA 00:50");
+  EXPECT_EQ(Progress::format(30, -1, 2.0, "lost 1"), "frame 30  15.0 frames/s  lost 1");
+}
+
+}  // namespace
+}  // namespace emf::pipeline
