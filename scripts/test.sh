@@ -28,8 +28,8 @@ for stage in $stages; do
          ctest --output-on-failure -j "$jobs" -LE 'slow|install') || status=1
       ;;
     tsan)
-      bash scripts/build.sh build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DEMF_SANITIZE=thread \
-        -DEMF_BUILD_BENCH=OFF
+      EMF_BUILD_TARGET=emf_threads_tests bash scripts/build.sh build-tsan \
+        -DCMAKE_BUILD_TYPE=RelWithDebInfo -DEMF_SANITIZE=thread -DEMF_BUILD_BENCH=OFF
       (cd build-tsan && TSAN_OPTIONS=halt_on_error=1 \
          ctest --output-on-failure -j "$jobs" -L threads --no-tests=ignore) || status=1
       ;;
