@@ -38,21 +38,21 @@ struct Intrinsics {
 
 /// One instance from a detector (or from a dataset's masks/ folder).
 struct Detection {
-  int id = 0;                  // detection id within the frame (1..n); not an object id
-  std::string class_name;      // e.g. "car", "person"
-  float score = 0.f;           // [0, 1]
-  cv::Rect box;                // pixels, inside the image
-  cv::Mat mask;                // CV_32F probability in [0, 1] (binary masks are 0/1), image size
+  int id = 0;              // detection id within the frame (1..n); not an object id
+  std::string class_name;  // e.g. "car", "person"
+  float score = 0.f;       // [0, 1]
+  cv::Rect box;            // pixels, inside the image
+  cv::Mat mask;            // CV_32F probability in [0, 1] (binary masks are 0/1), image size
 };
 
 struct Frame {
-  int64_t index = 0;            // 0-based position in the source
-  double timestamp = 0;         // seconds (depth timestamp)
-  std::string timestamp_text;   // the depth timestamp exactly as the source wrote it
-  double rgb_timestamp = 0;     // seconds
-  cv::Mat depth;                // CV_32F metres, NaN = invalid
-  cv::Mat color;                // CV_8UC3 BGR (may be empty); same size as depth or not
-  std::optional<std::vector<Detection>> detections;  // present on frames the source labels
+  int64_t index = 0;           // 0-based position in the source
+  double timestamp = 0;        // seconds (depth timestamp)
+  std::string timestamp_text;  // the depth timestamp exactly as the source wrote it
+  double rgb_timestamp = 0;    // seconds
+  cv::Mat depth;               // CV_32F metres, NaN = invalid
+  cv::Mat color;               // CV_8UC3 BGR (may be empty); same size as depth or not
+  std::optional<std::vector<Detection>> detections;    // present on frames the source labels
   std::optional<Eigen::Isometry3d> T_world_camera_gt;  // ground truth when the source has it
   /// Ground-truth object poses (T_world_object) by object id, and the rendered instance ids
   /// (CV_16U, 0 = background), when the source is synthetic.
