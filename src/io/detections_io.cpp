@@ -113,8 +113,8 @@ std::optional<std::vector<Detection>> readFrameDetections(const std::string& mas
   const bool has_png = fs::exists(png), has_txt = fs::exists(txt);
   if (!has_png && !has_txt) return std::nullopt;
   if (!has_txt) {
-    throw IoError("detection mask '" + png + "' exists but its list '" + txt +
-                  "' does not; write both files for a labelled frame");
+    throw IoError("detection list '" + txt + "' does not exist but its mask '" + png +
+                  "' does; write both files for a labelled frame");
   }
   return readDetectionFiles(png, txt, image_size);
 }
