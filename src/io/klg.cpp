@@ -83,6 +83,16 @@ bool KlgSource::next(Frame& frame) {
     throw IoError(where + ": depth size " + std::to_string(depth_size) + " / image size " +
                   std::to_string(image_size) + " are not valid; corrupt file");
   }
+  // Check the sizes against the rest of the file before allocating (a corrupt size must not
+  // become a multi-gigabyte allocation).
+  const uint64_t remaining = file_size_ - offset_;
+  if (static_cast<uint64_t>(depth_size) + static_cast<uint64_t>(image_size) > remaining) {
+    throw IoError(where + ": depth size " + std::to_string(depth_size) + " + image size " +
+                  std::to_string(image_size) + " bytes exceed the " + std::to_string(remaining) +
+                  " bytes left in the file (of " + std::to_string(file_size_) +
+                  "); the header announces " + std::to_string(frame_count_) +
+                  " frames: truncated recording or corrupt file");
+  }
   if (i > 0 && timestamp_us <= last_timestamp_us_) {
     throw IoError(where + ": timestamp " + std::to_string(timestamp_us) +
                   " us is not after the previous frame's (" + std::to_string(last_timestamp_us_) +

@@ -168,8 +168,16 @@ TEST(Klg, BrokenFilesGiveErrorsNamingFrameAndOffset) {
     Frame f;
     ASSERT_TRUE(s->next(f));
     ASSERT_TRUE(s->next(f));
+    expectErrorContaining([&] { s->next(f); }, {cut, "frame 2", "bytes left in the file",
+                                                "announces 3 frames", "truncated"});
+  }
+  // Cut inside a frame header.
+  fs::resize_file(cut, 10);
+  {
+    auto s = openSource("klg:" + cut + q, SourceOptions{});
+    Frame f;
     expectErrorContaining([&] { s->next(f); },
-                          {cut, "frame 2", "file ends at byte", "announces 3 frames", "truncated"});
+                          {cut, "frame 0", "file ends at byte 10", "timestamp", "truncated"});
   }
   // Wrong image size for the depth blocks.
   {
