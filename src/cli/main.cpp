@@ -19,6 +19,8 @@ const std::vector<Command>& commands() {
        emf::cli::cmdInfo},
       {"version", "print the version", emf::cli::cmdVersion},
       {"config", "list, check or print configuration keys", emf::cli::cmdConfig},
+      {"eval", "trajectory errors (ATE, RPE) of the camera and objects vs ground truth",
+       emf::cli::cmdEval},
   };
   return kCommands;
 }

@@ -1,0 +1,397 @@
+#include "io/eval.h"
+
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <numeric>
+#include <regex>
+
+#include "common/error.h"
+
+namespace emf::io {
+namespace fs = std::filesystem;
+
+ErrorStats errorStats(std::vector<double> errors) {
+  ErrorStats s;
+  s.count = errors.size();
+  if (errors.empty()) return s;
+  const double n = static_cast<double>(errors.size());
+  double sum = 0, sum_sq = 0;
+  for (double e : errors) {
+    sum += e;
+    sum_sq += e * e;
+  }
+  s.mean = sum / n;
+  s.rmse = std::sqrt(sum_sq / n);
+  double var = 0;
+  for (double e : errors) var += (e - s.mean) * (e - s.mean);
+  s.std = std::sqrt(var / n);
+  std::sort(errors.begin(), errors.end());
+  s.min = errors.front();
+  s.max = errors.back();
+  const size_t mid = errors.size() / 2;
+  s.median = errors.size() % 2 ? errors[mid] : 0.5 * (errors[mid - 1] + errors[mid]);
+  return s;
+}
+
+AteResult computeAte(const Trajectory& gt, const Trajectory& est, double max_diff_s) {
+  const auto matches = associateStamps(gt.stamps, est.stamps, max_diff_s);
+  if (matches.size() < kMinAtePairs) {
+    throw InvalidArgument(
+        "only " + std::to_string(matches.size()) + " timestamps of '" + est.source + "' (" +
+        std::to_string(est.size()) + " poses) are within " + std::to_string(max_diff_s) +
+        " s of '" + gt.source + "' (" + std::to_string(gt.size()) + " poses); need at least " +
+        std::to_string(kMinAtePairs) + ": do both files use the same clock / the right files?");
+  }
+  const size_t n = matches.size();
+  Eigen::Matrix3Xd model(3, n), data(3, n);  // model = estimate, data = ground truth
+  AteResult r;
+  r.pairs = n;
+  for (size_t k = 0; k < n; ++k) {
+    model.col(static_cast<Eigen::Index>(k)) = est.poses[matches[k].second].translation();
+    data.col(static_cast<Eigen::Index>(k)) = gt.poses[matches[k].first].translation();
+    r.gt_stamps.push_back(gt.stamps[matches[k].first]);
+  }
+  // Horn's method as evaluate_ate.py's align(): W = sum model_c data_c^T, SVD of W^T.
+  const Eigen::Vector3d model_mean = model.rowwise().mean();
+  const Eigen::Vector3d data_mean = data.rowwise().mean();
+  const Eigen::Matrix3Xd model_c = model.colwise() - model_mean;
+  const Eigen::Matrix3Xd data_c = data.colwise() - data_mean;
+  const Eigen::Matrix3d W = model_c * data_c.transpose();
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(W.transpose(), Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Eigen::Matrix3d U = svd.matrixU(), V = svd.matrixV();
+  Eigen::Matrix3d S = Eigen::Matrix3d::Identity();
+  if (U.determinant() * V.determinant() < 0) S(2, 2) = -1;
+  const Eigen::Matrix3d R = U * S * V.transpose();
+  const Eigen::Vector3d t = data_mean - R * model_mean;
+  r.T_gt_est.linear() = R;
+  r.T_gt_est.translation() = t;
+  for (size_t k = 0; k < n; ++k) {
+    const Eigen::Vector3d aligned = R * model.col(static_cast<Eigen::Index>(k)) + t;
+    r.est_positions_aligned.push_back(aligned);
+    r.gt_positions.push_back(data.col(static_cast<Eigen::Index>(k)));
+    r.errors_m.push_back((aligned - data.col(static_cast<Eigen::Index>(k))).norm());
+  }
+  r.trans_m = errorStats(r.errors_m);
+  return r;
+}
+
+namespace {
+
+constexpr double kDegPerRad = 57.29577951308232;
+
+// evaluate_rpe.py's find_closest_index(), literally (a binary search that keeps the closest
+// element seen; ties go to the first one visited).
+size_t findClosestIndex(const std::vector<double>& L, double t) {
+  size_t beginning = 0, end = L.size(), best = 0;
+  double difference = std::abs(L[0] - t);
+  while (beginning < end) {
+    const size_t middle = (end + beginning) / 2;
+    if (std::abs(L[middle] - t) < difference) {
+      difference = std::abs(L[middle] - t);
+      best = middle;
+    }
+    if (t == L[middle]) return middle;
+    if (L[middle] > t) {
+      end = middle;
+    } else {
+      beginning = middle + 1;
+    }
+  }
+  return best;
+}
+
+double medianOf(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const size_t mid = v.size() / 2;
+  return v.size() % 2 ? v[mid] : 0.5 * (v[mid - 1] + v[mid]);
+}
+
+}  // namespace
+
+RpeResult computeRpe(const Trajectory& gt, const Trajectory& est, double delta_s) {
+  if (gt.size() < 2 || est.size() < 2) {
+    throw InvalidArgument("RPE needs at least 2 poses in each trajectory ('" + gt.source +
+                          "' has " + std::to_string(gt.size()) + ", '" + est.source + "' " +
+                          std::to_string(est.size()) + ")");
+  }
+  // Trajectory stamps are strictly increasing, i.e. already the sorted key lists of the tool.
+  const std::vector<double>& stamps_gt = gt.stamps;
+  const std::vector<double>& stamps_est = est.stamps;
+  std::vector<double> gt_intervals;
+  for (size_t k = 1; k < stamps_gt.size(); ++k) {
+    gt_intervals.push_back(stamps_gt[k] - stamps_gt[k - 1]);
+  }
+  const double gt_max_time_difference = 2 * medianOf(gt_intervals);
+
+  std::vector<double> trans, rot;
+  for (size_t i = 0; i < stamps_est.size(); ++i) {
+    const size_t j = findClosestIndex(stamps_est, stamps_est[i] + delta_s);
+    if (j == stamps_est.size() - 1) continue;
+    const size_t g0 = findClosestIndex(stamps_gt, stamps_est[i]);
+    const size_t g1 = findClosestIndex(stamps_gt, stamps_est[j]);
+    if (std::abs(stamps_gt[g0] - stamps_est[i]) > gt_max_time_difference ||
+        std::abs(stamps_gt[g1] - stamps_est[j]) > gt_max_time_difference) {
+      continue;
+    }
+    const Eigen::Isometry3d est_rel = est.poses[j].inverse() * est.poses[i];
+    const Eigen::Isometry3d gt_rel = gt.poses[g1].inverse() * gt.poses[g0];
+    const Eigen::Isometry3d error = est_rel.inverse() * gt_rel;
+    trans.push_back(error.translation().norm());
+    const double c = std::min(1.0, std::max(-1.0, (error.linear().trace() - 1.0) / 2.0));
+    rot.push_back(std::acos(c) * kDegPerRad);
+  }
+  if (trans.size() < 2) {
+    throw InvalidArgument("RPE: only " + std::to_string(trans.size()) + " pose pairs " +
+                          std::to_string(delta_s) + " s apart in '" + est.source +
+                          "' have ground truth in '" + gt.source + "'; need at least 2");
+  }
+  RpeResult r;
+  r.pairs = trans.size();
+  r.delta_s = delta_s;
+  r.trans_m = errorStats(trans);
+  r.rot_deg = errorStats(rot);
+  return r;
+}
+
+TrajectoryEval evaluateTrajectory(const std::string& name, const Trajectory& gt,
+                                  const Trajectory& est, const EvalOptions& options) {
+  TrajectoryEval e;
+  e.name = name;
+  e.gt_file = gt.source;
+  e.est_file = est.source;
+  e.gt_poses = gt.size();
+  e.est_poses = est.size();
+  const size_t matched = associateStamps(gt.stamps, est.stamps, options.max_diff_s).size();
+  e.coverage = gt.empty() ? 0.0 : static_cast<double>(matched) / static_cast<double>(gt.size());
+  try {
+    e.ate = computeAte(gt, est, options.max_diff_s);
+  } catch (const InvalidArgument& ex) {
+    e.note = std::string("no ATE: ") + ex.what();
+  }
+  try {
+    e.rpe = computeRpe(gt, est, options.rpe_delta_s);
+  } catch (const InvalidArgument& ex) {
+    e.note += std::string(e.note.empty() ? "" : "; ") + "no RPE: " + ex.what();
+  }
+  return e;
+}
+
+ObjectEval evaluateObject(int gt_id, const Trajectory& gt,
+                          const std::vector<std::pair<int, Trajectory>>& estimates,
+                          const EvalOptions& options) {
+  ObjectEval o;
+  o.gt_id = gt_id;
+  const std::string name = "object " + std::to_string(gt_id);
+  const Trajectory* best = nullptr;
+  double best_rmse = 0;
+  double best_coverage_seen = 0;
+  for (const auto& [id, est] : estimates) {
+    ObjectCandidate c;
+    c.est_id = id;
+    c.est_file = est.source;
+    const size_t matched = associateStamps(gt.stamps, est.stamps, options.max_diff_s).size();
+    c.coverage = gt.empty() ? 0.0 : static_cast<double>(matched) / static_cast<double>(gt.size());
+    best_coverage_seen = std::max(best_coverage_seen, c.coverage);
+    if (c.coverage >= options.min_object_coverage && matched >= kMinAtePairs) {
+      c.ate_rmse_m = computeAte(gt, est, options.max_diff_s).trans_m.rmse;
+      if (!best || *c.ate_rmse_m < best_rmse) {
+        best = &est;
+        best_rmse = *c.ate_rmse_m;
+        o.est_id = id;
+      }
+    }
+    o.candidates.push_back(c);
+  }
+  if (best) {
+    o.eval = evaluateTrajectory(name, gt, *best, options);
+  } else {
+    o.eval.name = name;
+    o.eval.gt_file = gt.source;
+    o.eval.gt_poses = gt.size();
+    o.eval.coverage = best_coverage_seen;
+    char text[160];
+    std::snprintf(text, sizeof(text),
+                  "no estimated object covers %.0f%% of its %zu timestamps (best %.1f%%)",
+                  options.min_object_coverage * 100, gt.size(), best_coverage_seen * 100);
+    o.eval.note = estimates.empty() ? "no estimated objects" : text;
+  }
+  return o;
+}
+
+namespace {
+
+// `<dir>/<files matching re>` by the integer of the first capture group.
+std::map<int, std::string> numberedTrajectories(const fs::path& dir, const std::regex& re) {
+  std::map<int, std::string> out;
+  if (!fs::is_directory(dir)) return out;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    std::smatch m;
+    const std::string name = entry.path().filename().string();
+    if (std::regex_match(name, m, re)) out[std::stoi(m[1].str())] = entry.path().string();
+  }
+  return out;
+}
+
+}  // namespace
+
+EvalReport evaluatePaths(const std::string& gt_path, const std::string& est_path,
+                         const EvalOptions& options) {
+  EvalReport report;
+  report.gt_path = gt_path;
+  report.est_path = est_path;
+  report.options = options;
+  if (!fs::exists(gt_path)) throw IoError("ground truth '" + gt_path + "' does not exist");
+  if (!fs::exists(est_path)) throw IoError("estimate '" + est_path + "' does not exist");
+
+  const bool gt_dir = fs::is_directory(gt_path), est_dir = fs::is_directory(est_path);
+  const std::string gt_camera_file =
+      gt_dir ? (fs::path(gt_path) / "groundtruth.txt").string() : gt_path;
+  const std::string est_camera_file =
+      est_dir ? (fs::path(est_path) / "camera.txt").string() : est_path;
+  if (!fs::exists(gt_camera_file)) {
+    throw IoError("ground-truth folder '" + gt_path + "' has no groundtruth.txt");
+  }
+  if (!fs::exists(est_camera_file)) {
+    throw IoError("estimate folder '" + est_path +
+                  "' has no camera.txt (an emf output folder "
+                  "has camera.txt and object-<id>.txt)");
+  }
+  const Trajectory gt_camera = readTrajectory(gt_camera_file);
+  const Trajectory est_camera = readTrajectory(est_camera_file);
+  report.camera = evaluateTrajectory("camera", gt_camera, est_camera, options);
+  if (!report.camera.ate) {
+    throw InvalidArgument("camera: " + report.camera.note.substr(std::string("no ATE: ").size()));
+  }
+
+  if (!gt_dir) return report;
+  const auto gt_objects = numberedTrajectories(fs::path(gt_path) / "objects",
+                                               std::regex(R"(gt-object-(\d+)-camera\.txt)"));
+  std::vector<std::pair<int, Trajectory>> estimates;
+  if (est_dir) {
+    for (const auto& [id, file] :
+         numberedTrajectories(est_path, std::regex(R"(object-(\d+)\.txt)"))) {
+      estimates.emplace_back(id, readTrajectory(file));
+    }
+  }
+  std::vector<int> chosen;
+  for (const auto& [k, file] : gt_objects) {
+    report.objects.push_back(evaluateObject(k, readTrajectory(file), estimates, options));
+    if (report.objects.back().est_id) chosen.push_back(*report.objects.back().est_id);
+  }
+  for (const auto& [id, est] : estimates) {
+    if (std::find(chosen.begin(), chosen.end(), id) == chosen.end()) {
+      report.unmatched_est_ids.push_back(id);
+    }
+  }
+  return report;
+}
+
+std::string formatReport(const EvalReport& report) {
+  std::vector<const TrajectoryEval*> rows = {&report.camera};
+  for (const auto& o : report.objects) rows.push_back(&o.eval);
+  auto estName = [](const TrajectoryEval& e) {
+    return e.est_file.empty() ? std::string("-") : fs::path(e.est_file).filename().string();
+  };
+  int est_w = 8;
+  for (const auto* e : rows) est_w = std::max(est_w, static_cast<int>(estName(*e).size()));
+  std::string out;
+  char line[1024];
+  std::snprintf(line, sizeof(line), "%-10s %-*s %6s %7s %9s %9s %9s %9s %6s %10s %9s\n",
+                "trajectory", est_w, "estimate", "pairs", "cover", "ATE rmse", "mean", "median",
+                "max", "RPE n", "RPE trans", "RPE rot");
+  out += line;
+  std::snprintf(line, sizeof(line), "%-10s %-*s %6s %7s %9s %9s %9s %9s %6s %10s %9s\n", "", est_w,
+                "", "", "[%]", "[m]", "[m]", "[m]", "[m]", "", "rmse [m]", "rmse[deg]");
+  out += line;
+  for (const auto* e : rows) {
+    const std::string est = estName(*e);
+    if (!e->ate) {
+      std::snprintf(line, sizeof(line), "%-10s %-*s %6s %6.1f%%  %s\n", e->name.c_str(), est_w,
+                    est.c_str(), "-", e->coverage * 100, e->note.c_str());
+      out += line;
+      continue;
+    }
+    const ErrorStats& a = e->ate->trans_m;
+    std::snprintf(line, sizeof(line), "%-10s %-*s %6zu %6.1f%% %9.6f %9.6f %9.6f %9.6f",
+                  e->name.c_str(), est_w, est.c_str(), e->ate->pairs, e->coverage * 100, a.rmse,
+                  a.mean, a.median, a.max);
+    out += line;
+    if (e->rpe) {
+      std::snprintf(line, sizeof(line), " %6zu %10.6f %9.6f\n", e->rpe->pairs, e->rpe->trans_m.rmse,
+                    e->rpe->rot_deg.rmse);
+    } else {
+      std::snprintf(line, sizeof(line), " %6s %10s %9s\n", "-", "-", "-");
+    }
+    out += line;
+  }
+  if (!report.unmatched_est_ids.empty()) {
+    out += "estimated objects matched to no ground-truth object:";
+    for (int id : report.unmatched_est_ids) out += " " + std::to_string(id);
+    out += "\n";
+  }
+  return out;
+}
+
+namespace {
+
+nlohmann::json statsJson(const ErrorStats& s) {
+  return {{"rmse", s.rmse}, {"mean", s.mean}, {"median", s.median},
+          {"std", s.std},   {"min", s.min},   {"max", s.max}};
+}
+
+nlohmann::json trajectoryJson(const TrajectoryEval& e) {
+  nlohmann::json j = {{"name", e.name},           {"gt_file", e.gt_file},
+                      {"est_file", e.est_file},   {"gt_poses", e.gt_poses},
+                      {"est_poses", e.est_poses}, {"coverage", e.coverage}};
+  if (e.ate) {
+    j["ate_m"] = statsJson(e.ate->trans_m);
+    j["ate_m"]["pairs"] = e.ate->pairs;
+  } else {
+    j["ate_m"] = nullptr;
+  }
+  if (e.rpe) {
+    j["rpe"] = {{"pairs", e.rpe->pairs},
+                {"delta_s", e.rpe->delta_s},
+                {"trans_m", statsJson(e.rpe->trans_m)},
+                {"rot_deg", statsJson(e.rpe->rot_deg)}};
+  } else {
+    j["rpe"] = nullptr;
+  }
+  if (!e.note.empty()) j["note"] = e.note;
+  return j;
+}
+
+}  // namespace
+
+nlohmann::json reportToJson(const EvalReport& report) {
+  nlohmann::json j;
+  j["gt"] = report.gt_path;
+  j["est"] = report.est_path;
+  j["options"] = {{"max_diff_s", report.options.max_diff_s},
+                  {"rpe_delta_s", report.options.rpe_delta_s},
+                  {"min_object_coverage", report.options.min_object_coverage}};
+  j["camera"] = trajectoryJson(report.camera);
+  j["objects"] = nlohmann::json::array();
+  for (const auto& o : report.objects) {
+    nlohmann::json oj = trajectoryJson(o.eval);
+    oj["gt_id"] = o.gt_id;
+    oj["est_id"] = o.est_id ? nlohmann::json(*o.est_id) : nlohmann::json(nullptr);
+    oj["candidates"] = nlohmann::json::array();
+    for (const auto& c : o.candidates) {
+      oj["candidates"].push_back(
+          {{"est_id", c.est_id},
+           {"est_file", c.est_file},
+           {"coverage", c.coverage},
+           {"ate_rmse_m", c.ate_rmse_m ? nlohmann::json(*c.ate_rmse_m) : nlohmann::json()}});
+    }
+    j["objects"].push_back(oj);
+  }
+  j["unmatched_est_ids"] = report.unmatched_est_ids;
+  return j;
+}
+
+}  // namespace emf::io

@@ -1,0 +1,124 @@
+// Trajectory evaluation as the TUM RGB-D benchmark tools (evaluate_ate.py, evaluate_rpe.py) do
+// it, for the camera and for objects. Camera trajectories are T_world_camera; object
+// trajectories are T_object_camera (the camera's pose in the object's frame), so ATE with a
+// rigid alignment does not depend on where each object's origin lies.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "io/trajectory.h"
+
+namespace emf::io {
+
+/// Summary of a list of errors (units of the errors). median as numpy (mean of the two middle
+/// values for an even count); std is the population standard deviation.
+struct ErrorStats {
+  size_t count = 0;
+  double rmse = 0, mean = 0, median = 0, std = 0, min = 0, max = 0;
+};
+ErrorStats errorStats(std::vector<double> errors);
+
+/// Absolute trajectory error after a rigid (no scale) Horn/Umeyama alignment of the estimated
+/// positions onto the associated ground-truth positions.
+struct AteResult {
+  size_t pairs = 0;
+  ErrorStats trans_m;  // per-pair position error after alignment, metres
+  Eigen::Isometry3d T_gt_est = Eigen::Isometry3d::Identity();  // applied to the estimate
+  std::vector<double> gt_stamps;                               // per pair, seconds
+  std::vector<double> errors_m;                                // per pair
+  std::vector<Eigen::Vector3d> gt_positions, est_positions_aligned;
+};
+
+/// The minimum number of associated pairs for an ATE (a rigid alignment needs 3 points).
+constexpr size_t kMinAtePairs = 3;
+
+/// ATE like evaluate_ate.py: association as associate.py within `max_diff_s`, alignment of the
+/// estimate onto the ground truth (SVD of the cross-covariance, reflection-corrected). Throws
+/// InvalidArgument when fewer than kMinAtePairs pairs associate.
+AteResult computeAte(const Trajectory& gt, const Trajectory& est, double max_diff_s = 0.02);
+
+/// Relative pose error with a fixed time delta, like evaluate_rpe.py --fixed_delta (without its
+/// random subsampling above 10000 pairs): for each estimated pose i, j is the estimated pose
+/// closest in time to t_i + delta (pairs whose j is the last pose are dropped); ground-truth
+/// poses are the closest in time, and pairs whose ground truth is more than twice the median
+/// ground-truth interval away are dropped. Error = (E_i^-1 E_j)^-1 (G_i^-1 G_j).
+struct RpeResult {
+  size_t pairs = 0;
+  double delta_s = 0;
+  ErrorStats trans_m;  // translational error, metres
+  ErrorStats rot_deg;  // rotation angle of the error, degrees
+};
+/// Throws InvalidArgument when fewer than 2 pairs remain.
+RpeResult computeRpe(const Trajectory& gt, const Trajectory& est, double delta_s = 1.0);
+
+struct EvalOptions {
+  double max_diff_s = 0.02;          // timestamp association, seconds
+  double rpe_delta_s = 1.0;          // RPE time delta, seconds
+  double min_object_coverage = 0.3;  // an estimate must cover this fraction of a GT object
+};
+
+/// The evaluation of one estimated trajectory against one ground-truth trajectory.
+struct TrajectoryEval {
+  std::string name;               // "camera", "object 2"
+  std::string gt_file, est_file;  // est_file empty: no estimate matched
+  size_t gt_poses = 0, est_poses = 0;
+  double coverage = 0;  // fraction of GT timestamps with an associated estimate
+  std::optional<AteResult> ate;
+  std::optional<RpeResult> rpe;
+  std::string note;  // why ate/rpe are missing, if they are
+};
+
+/// One candidate estimate considered for a ground-truth object.
+struct ObjectCandidate {
+  int est_id = 0;
+  std::string est_file;
+  double coverage = 0;
+  std::optional<double> ate_rmse_m;  // when eligible (coverage and pair count sufficient)
+};
+
+struct ObjectEval {
+  int gt_id = 0;
+  std::optional<int> est_id;  // the matched estimate
+  TrajectoryEval eval;
+  std::vector<ObjectCandidate> candidates;
+};
+
+struct EvalReport {
+  std::string gt_path, est_path;
+  EvalOptions options;
+  TrajectoryEval camera;
+  std::vector<ObjectEval> objects;
+  std::vector<int> unmatched_est_ids;  // estimated objects no ground-truth object chose
+};
+
+/// Evaluates one pair of trajectories (ATE, RPE, coverage). A missing ATE/RPE (too few pairs)
+/// is recorded in `note` instead of throwing.
+TrajectoryEval evaluateTrajectory(const std::string& name, const Trajectory& gt,
+                                  const Trajectory& est, const EvalOptions& options);
+
+/// Matches ground-truth object `gt` to the estimate with the lowest ATE RMSE among those that
+/// cover at least options.min_object_coverage of its timestamps, and evaluates it.
+ObjectEval evaluateObject(int gt_id, const Trajectory& gt,
+                          const std::vector<std::pair<int, Trajectory>>& estimates,
+                          const EvalOptions& options);
+
+/// Evaluates paths as `emf eval` does. `gt_path`: a dataset folder (groundtruth.txt and
+/// objects/gt-object-<k>-camera.txt) or a trajectory file. `est_path`: an emf output folder
+/// (camera.txt and object-<id>.txt) or a trajectory file. Throws IoError for missing/bad files
+/// and InvalidArgument when the camera trajectories do not associate.
+EvalReport evaluatePaths(const std::string& gt_path, const std::string& est_path,
+                         const EvalOptions& options);
+
+/// A fixed-width table of the report (one line per trajectory).
+std::string formatReport(const EvalReport& report);
+/// The report as JSON (metres, degrees, seconds; see README "emf eval").
+nlohmann::json reportToJson(const EvalReport& report);
+/// Draws the report: for the camera and every matched object, a top view of the ground truth
+/// and the aligned estimate and the translational error over time. Written atomically as PNG.
+void writeEvalPlot(const std::string& path, const EvalReport& report);
+
+}  // namespace emf::io

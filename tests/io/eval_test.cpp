@@ -1,0 +1,338 @@
+// Evaluation: the TUM tools' reference figures, hand-made cases with known answers, object
+// matching, errors, and the `emf eval` command.
+#include "io/eval.h"
+
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <random>
+
+#include "common/error.h"
+#include "io_test_util.h"
+#include "test_support.h"
+
+namespace emf::io {
+namespace {
+namespace fs = std::filesystem;
+
+using testing::expectErrorContaining;
+using testing::writeText;
+
+// The reference figures are given to 6 decimals (metres) / 6 decimals (degrees).
+constexpr double kReferenceTolM = 1e-6;
+constexpr double kReferenceTolDeg = 1e-4;
+// Hand-made cases are exact up to floating-point rounding.
+constexpr double kExactTolM = 1e-9;
+constexpr double kExactTolDeg = 1e-6;
+// A zero rotation error is computed as acos((trace - 1) / 2), which turns rounding of 1e-16 in
+// the trace into ~1e-8 rad: "zero" angles are only zero to about 1e-6 deg.
+constexpr double kZeroAngleTolDeg = 2e-5;
+
+std::string refGt() { return test::dataPath("trajectories/freiburg1_xyz-groundtruth.txt"); }
+std::string refEst() { return test::dataPath("trajectories/freiburg1_xyz-rgbdslam.txt"); }
+
+Eigen::Isometry3d pose(const Eigen::Vector3d& t, double yaw, double pitch = 0, double roll = 0) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
+                Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+                Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
+  T.translation() = t;
+  return T;
+}
+
+TEST(Eval, ReproducesTheTumToolsOnTheReferencePair) {
+  const Trajectory gt = readTrajectory(refGt()), est = readTrajectory(refEst());
+  const AteResult ate = computeAte(gt, est, 0.02);
+  EXPECT_EQ(ate.pairs, 786u);
+  EXPECT_NEAR(ate.trans_m.rmse, 0.013473, kReferenceTolM);
+  EXPECT_NEAR(ate.trans_m.mean, 0.012029, kReferenceTolM);
+  EXPECT_NEAR(ate.trans_m.median, 0.011176, kReferenceTolM);
+  EXPECT_NEAR(ate.trans_m.max, 0.034727, kReferenceTolM);
+  const RpeResult rpe = computeRpe(gt, est, 1.0);
+  EXPECT_EQ(rpe.pairs, 753u);
+  EXPECT_NEAR(rpe.trans_m.rmse, 0.021217, kReferenceTolM);
+  EXPECT_NEAR(rpe.rot_deg.rmse, 0.934480, kReferenceTolDeg);
+}
+
+TEST(Eval, RigidlyMovedCopyHasZeroError) {
+  const Trajectory gt = readTrajectory(refGt());
+  Trajectory est;
+  const Eigen::Isometry3d T = pose(Eigen::Vector3d(3, -2, 0.5), 1.1, -0.4, 0.3);
+  for (size_t i = 0; i < gt.size(); i += 3) est.append(gt.stamps[i] + 0.001, T * gt.poses[i]);
+  const AteResult ate = computeAte(gt, est, 0.02);
+  EXPECT_EQ(ate.pairs, est.size());
+  EXPECT_LT(ate.trans_m.max, kExactTolM);
+  // The alignment found is the inverse of the applied transform.
+  EXPECT_LT(((ate.T_gt_est * T).matrix() - Eigen::Matrix4d::Identity()).norm(), 1e-9);
+  const RpeResult rpe = computeRpe(gt, est, 1.0);
+  EXPECT_LT(rpe.trans_m.max, kExactTolM);
+  EXPECT_LT(rpe.rot_deg.max, kZeroAngleTolDeg);
+}
+
+TEST(Eval, KnownOffsetOnHalfThePosesIsHalvedByTheAlignment) {
+  // Poses come in pairs at the same position (a helix); the second of each pair is offset by
+  // d in the estimate. The offset poses and the others have the same centroid and the cross-
+  // covariance stays symmetric, so the optimal alignment is a pure shift by d/2: every pose
+  // then has error |d|/2 exactly.
+  const Eigen::Vector3d d(0.03, -0.04, 0.12);  // |d| = 0.13 m
+  Trajectory gt, est;
+  for (int i = 0; i < 200; ++i) {
+    const double s = 0.1 * (i / 2);
+    const Eigen::Vector3d p(std::cos(s), std::sin(s), 0.2 * s);
+    gt.append(i * 0.1, pose(p, s));
+    est.append(i * 0.1 + 0.005, pose(p + (i % 2 ? d : Eigen::Vector3d::Zero()), s));
+  }
+  const AteResult ate = computeAte(gt, est, 0.02);
+  EXPECT_EQ(ate.pairs, 200u);
+  for (double e :
+       {ate.trans_m.rmse, ate.trans_m.mean, ate.trans_m.median, ate.trans_m.min, ate.trans_m.max}) {
+    EXPECT_NEAR(e, 0.065, kExactTolM);
+  }
+  EXPECT_LT((ate.T_gt_est.translation() + d / 2).norm(), kExactTolM);
+  // The same offset on every pose is absorbed completely.
+  Trajectory all;
+  for (size_t i = 0; i < gt.size(); ++i) {
+    all.append(gt.stamps[i], pose(gt.poses[i].translation() + d, 0));
+  }
+  EXPECT_LT(computeAte(gt, all, 0.02).trans_m.max, kExactTolM);
+}
+
+// Constant-velocity cases at 30 Hz: the RPE over 1 s is the velocity difference x 1 s.
+TEST(Eval, RpeOnConstantVelocityMotion) {
+  const int n = 150;
+  const double yaw_rate = 10.0 * M_PI / 180;  // rad/s, same for both
+  Trajectory gt, faster;
+  for (int k = 0; k < n; ++k) {
+    const double t = k / 30.0;
+    gt.append(t, pose(Eigen::Vector3d(0.5 * t, 0, 0), yaw_rate * t));
+    faster.append(t, pose(Eigen::Vector3d(0.6 * t, 0, 0), yaw_rate * t));
+  }
+  // For each i, j = i + 30 (closest to t_i + 1 s); pairs whose j is the last pose are dropped.
+  const RpeResult r = computeRpe(gt, faster, 1.0);
+  EXPECT_EQ(r.pairs, static_cast<size_t>(n - 31));
+  EXPECT_NEAR(r.trans_m.rmse, 0.1, kExactTolM);
+  EXPECT_NEAR(r.trans_m.min, 0.1, kExactTolM);
+  EXPECT_NEAR(r.trans_m.max, 0.1, kExactTolM);
+  EXPECT_LT(r.rot_deg.max, kZeroAngleTolDeg);
+  // Turning in place at 20 vs 22 deg/s: 2 degrees of rotation error, no translation error.
+  Trajectory spin_gt, spin_est;
+  for (int k = 0; k < n; ++k) {
+    const double t = k / 30.0;
+    spin_gt.append(t, pose(Eigen::Vector3d(1, 2, 3), 20.0 * M_PI / 180 * t, 0.3));
+    spin_est.append(t, pose(Eigen::Vector3d(1, 2, 3), 22.0 * M_PI / 180 * t, 0.3));
+  }
+  const RpeResult s = computeRpe(spin_gt, spin_est, 1.0);
+  EXPECT_NEAR(s.rot_deg.rmse, 2.0, kExactTolDeg);
+  EXPECT_NEAR(s.rot_deg.min, 2.0, kExactTolDeg);
+  EXPECT_LT(s.trans_m.max, kExactTolM);
+}
+
+TEST(Eval, StatsFollowNumpy) {
+  const ErrorStats s = errorStats({4, 1, 3, 2});
+  EXPECT_DOUBLE_EQ(s.median, 2.5);
+  EXPECT_DOUBLE_EQ(s.mean, 2.5);
+  EXPECT_DOUBLE_EQ(s.rmse, std::sqrt(7.5));
+  EXPECT_DOUBLE_EQ(s.std, std::sqrt(1.25));
+  EXPECT_DOUBLE_EQ(s.min, 1);
+  EXPECT_DOUBLE_EQ(s.max, 4);
+  EXPECT_DOUBLE_EQ(errorStats({3, 1, 2}).median, 2);
+}
+
+// ---- objects and folders ----------------------------------------------------------------------
+
+// A dataset folder with two ground-truth objects and an emf output folder with four estimates:
+//  object-7: GT object 1 in another frame + 2 mm noise        -> matches GT 1
+//  object-3: GT object 2 + 5 mm noise                          -> matches GT 2
+//  object-9: GT object 2 + 50 mm noise (worse ATE)             -> not chosen
+//  object-5: GT object 2 exactly, but only 20% of its frames   -> not eligible (coverage)
+struct ObjectScene {
+  std::string gt_dir, est_dir;
+  ObjectScene() {
+    gt_dir = test::tempDir("eval-gt");
+    est_dir = test::tempDir("eval-est");
+    std::mt19937 rng(7);
+    std::normal_distribution<double> noise(0.0, 1.0);
+    auto jitter = [&](const Eigen::Isometry3d& T, double sigma) {
+      Eigen::Isometry3d J = T;
+      J.translation() += sigma * Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+      return J;
+    };
+    Trajectory cam, obj1, obj2, e7, e3, e9, e5;
+    const Eigen::Isometry3d other_frame = pose(Eigen::Vector3d(1, 2, 3), 0.7, 0.2);
+    for (int k = 0; k < 150; ++k) {
+      const double t = k / 30.0;
+      cam.append(t, pose(Eigen::Vector3d(0.3 * t, 0.1 * std::sin(t), 0), 0.1 * t));
+      const Eigen::Isometry3d o1 = pose(Eigen::Vector3d(1 + 0.2 * t, std::cos(t), 0.1 * t), t);
+      const Eigen::Isometry3d o2 =
+          pose(Eigen::Vector3d(-0.5 * t, 0.3, std::sin(2 * t)), -0.5 * t, 0.1 * t);
+      if (k < 100) {
+        obj1.append(t, o1);
+        e7.append(t, jitter(other_frame * o1, 0.002));
+      }
+      if (k >= 50) {
+        obj2.append(t, o2);
+        e3.append(t, jitter(o2, 0.005));
+        e9.append(t, jitter(o2, 0.05));
+        if (k < 70) e5.append(t, o2);
+      }
+    }
+    writeTrajectory(gt_dir + "/groundtruth.txt", cam);
+    fs::create_directories(gt_dir + "/objects");
+    writeTrajectory(gt_dir + "/objects/gt-object-1-camera.txt", obj1);
+    writeTrajectory(gt_dir + "/objects/gt-object-2-camera.txt", obj2);
+    writeTrajectory(est_dir + "/camera.txt", cam);
+    writeTrajectory(est_dir + "/object-7.txt", e7);
+    writeTrajectory(est_dir + "/object-3.txt", e3);
+    writeTrajectory(est_dir + "/object-9.txt", e9);
+    writeTrajectory(est_dir + "/object-5.txt", e5);
+  }
+};
+
+TEST(Eval, ObjectsMatchTheLowestAteAmongCoveringEstimates) {
+  const ObjectScene scene;
+  const EvalReport r = evaluatePaths(scene.gt_dir, scene.est_dir, EvalOptions{});
+  ASSERT_TRUE(r.camera.ate.has_value());
+  EXPECT_LT(r.camera.ate->trans_m.max, kExactTolM * 10);  // camera.txt = ground truth (9 decimals)
+  EXPECT_DOUBLE_EQ(r.camera.coverage, 1.0);
+  ASSERT_EQ(r.objects.size(), 2u);
+
+  const ObjectEval& o1 = r.objects[0];
+  EXPECT_EQ(o1.gt_id, 1);
+  ASSERT_TRUE(o1.est_id.has_value());
+  EXPECT_EQ(*o1.est_id, 7);
+  EXPECT_DOUBLE_EQ(o1.eval.coverage, 1.0);
+  ASSERT_TRUE(o1.eval.ate.has_value());
+  EXPECT_EQ(o1.eval.ate->pairs, 100u);
+  // 2 mm isotropic noise: RMSE close to 2 mm * sqrt(3).
+  EXPECT_NEAR(o1.eval.ate->trans_m.rmse, 0.002 * std::sqrt(3.0), 0.0008);
+  EXPECT_TRUE(o1.eval.rpe.has_value());
+
+  const ObjectEval& o2 = r.objects[1];
+  EXPECT_EQ(o2.gt_id, 2);
+  ASSERT_TRUE(o2.est_id.has_value());
+  EXPECT_EQ(*o2.est_id, 3);
+  EXPECT_DOUBLE_EQ(o2.eval.coverage, 1.0);
+  for (const auto& c : o2.candidates) {
+    if (c.est_id == 5) {
+      EXPECT_DOUBLE_EQ(c.coverage, 0.2);
+      EXPECT_FALSE(c.ate_rmse_m.has_value());  // exact, but covers only 20% < 30%
+    }
+    if (c.est_id == 9) {
+      ASSERT_TRUE(c.ate_rmse_m.has_value());
+      EXPECT_GT(*c.ate_rmse_m, o2.eval.ate->trans_m.rmse);
+    }
+    if (c.est_id == 7) {
+      EXPECT_NEAR(c.coverage, 50.0 / 100.0, 1e-12);  // frames 50..99 of GT object 2's 100
+    }
+  }
+  EXPECT_EQ(r.unmatched_est_ids, (std::vector<int>{5, 9}));
+
+  // With a 15% threshold the exact partial estimate wins.
+  EvalOptions low;
+  low.min_object_coverage = 0.15;
+  const EvalReport r2 = evaluatePaths(scene.gt_dir, scene.est_dir, low);
+  EXPECT_EQ(*r2.objects[1].est_id, 5);
+  EXPECT_DOUBLE_EQ(r2.objects[1].eval.coverage, 0.2);
+}
+
+TEST(Eval, UnmatchedObjectIsReportedNotFatal) {
+  const ObjectScene scene;
+  for (const char* f : {"object-3.txt", "object-9.txt", "object-5.txt"}) {
+    fs::remove(scene.est_dir + "/" + f);
+  }
+  // object-7 covers all of GT object 1 but only half of GT object 2.
+  EvalOptions options;
+  options.min_object_coverage = 0.6;
+  const EvalReport r = evaluatePaths(scene.gt_dir, scene.est_dir, options);
+  ASSERT_EQ(r.objects.size(), 2u);
+  EXPECT_EQ(r.objects[0].est_id, 7);
+  EXPECT_FALSE(r.objects[1].est_id.has_value());
+  EXPECT_FALSE(r.objects[1].eval.ate.has_value());
+  EXPECT_DOUBLE_EQ(r.objects[1].eval.coverage, 0.5);
+  EXPECT_NE(r.objects[1].eval.note.find("no estimated object covers 60% of its 100 timestamps "
+                                        "(best 50.0%)"),
+            std::string::npos)
+      << r.objects[1].eval.note;
+  EXPECT_NE(formatReport(r).find("object 2"), std::string::npos);
+}
+
+TEST(Eval, BadInputsAreErrorsNamingFiles) {
+  const std::string dir = test::tempDir("eval");
+  writeText(dir + "/est.txt", "1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 0 1\n3.0 0 0 0 0 0 0\n");
+  expectErrorContaining([&] { evaluatePaths(refGt(), dir + "/est.txt", EvalOptions{}); },
+                        {dir + "/est.txt:3", "expected 8 fields"});
+  writeText(dir + "/late.txt", "1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 0 1\n3.0 0 0 0 0 0 0 1\n");
+  expectErrorContaining([&] { evaluatePaths(refGt(), dir + "/late.txt", EvalOptions{}); },
+                        {"only 0 timestamps", "late.txt", "same clock"});
+  expectErrorContaining([&] { evaluatePaths(refGt(), dir, EvalOptions{}); }, {"has no camera.txt"});
+  expectErrorContaining([&] { evaluatePaths(dir, refEst(), EvalOptions{}); },
+                        {"has no groundtruth.txt"});
+  expectErrorContaining([&] { evaluatePaths(dir + "/nope", refEst(), EvalOptions{}); },
+                        {"nope", "does not exist"});
+}
+
+// ---- emf eval -----------------------------------------------------------------------------------
+
+std::string cli() { return EMF_CLI_PATH; }
+
+TEST(EvalCli, PrintsTableAndWritesJsonAndPlot) {
+  const std::string out = test::tempDir("eval-cli");
+  std::string text;
+  ASSERT_EQ(test::runCommand(
+                cli() + " eval --gt " + refGt() + " --est " + refEst() + " --out " + out, &text),
+            0)
+      << text;
+  EXPECT_NE(text.find("camera"), std::string::npos) << text;
+  EXPECT_NE(text.find("0.013473"), std::string::npos) << text;
+  EXPECT_NE(text.find("0.934480"), std::string::npos) << text;
+  std::ifstream in(out + "/eval.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["camera"]["ate_m"]["pairs"], 786);
+  EXPECT_NEAR(j["camera"]["ate_m"]["rmse"].get<double>(), 0.013473, kReferenceTolM);
+  EXPECT_EQ(j["camera"]["rpe"]["pairs"], 753);
+  EXPECT_NEAR(j["camera"]["rpe"]["trans_m"]["rmse"].get<double>(), 0.021217, kReferenceTolM);
+  EXPECT_NEAR(j["camera"]["rpe"]["rot_deg"]["rmse"].get<double>(), 0.934480, kReferenceTolDeg);
+  const cv::Mat png = cv::imread(out + "/eval.png");
+  EXPECT_EQ(png.rows, 480);  // one row of panels: the camera
+  EXPECT_EQ(png.cols, 1200);
+  // Only eval.json and eval.png: no temporary files left.
+  size_t files = 0;
+  for (const auto& e : fs::directory_iterator(out)) files += e.is_regular_file();
+  EXPECT_EQ(files, 2u);
+}
+
+TEST(EvalCli, FoldersWithObjectsWriteIntoTheEstimateFolder) {
+  const ObjectScene scene;
+  std::string text;
+  ASSERT_EQ(
+      test::runCommand(cli() + " eval --gt " + scene.gt_dir + " --est " + scene.est_dir, &text), 0)
+      << text;
+  EXPECT_NE(text.find("object 1   object-7.txt"), std::string::npos) << text;
+  EXPECT_NE(text.find("object 2   object-3.txt"), std::string::npos) << text;
+  EXPECT_NE(text.find("matched to no ground-truth object: 5 9"), std::string::npos) << text;
+  std::ifstream in(scene.est_dir + "/eval.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  ASSERT_EQ(j["objects"].size(), 2u);
+  EXPECT_EQ(j["objects"][0]["est_id"], 7);
+  EXPECT_EQ(j["objects"][1]["est_id"], 3);
+  EXPECT_EQ(j["objects"][1]["coverage"], 1.0);
+  EXPECT_EQ(cv::imread(scene.est_dir + "/eval.png").rows, 3 * 480);
+}
+
+TEST(EvalCli, UsageAndErrors) {
+  std::string text;
+  EXPECT_EQ(test::runCommand(cli() + " eval --help", &text), 0);
+  EXPECT_NE(text.find("usage: emf eval"), std::string::npos) << text;
+  EXPECT_EQ(test::runCommand(cli() + " eval --gt " + refGt(), &text), 2);
+  EXPECT_NE(text.find("--gt and --est are required"), std::string::npos) << text;
+  EXPECT_EQ(test::runCommand(cli() + " eval --gt /nonexistent-gt --est " + refEst(), &text), 1);
+  EXPECT_NE(text.find("ground truth '/nonexistent-gt' does not exist"), std::string::npos) << text;
+  EXPECT_EQ(test::runCommand(cli() + " eval --gt " + refGt() + " --est " + refEst() + " --delta x",
+                             &text),
+            1);
+  EXPECT_NE(text.find("--delta must be a non-negative number"), std::string::npos) << text;
+}
+
+}  // namespace
+}  // namespace emf::io
