@@ -57,7 +57,7 @@ void clampProbability(cv::Mat* p) {
 /// where the src index space is that of `values` (pixel centres at integers).
 /// `logits` applies the sigmoid after sampling. Returns false when the mask is empty.
 bool sampleMask(const cv::Mat& values, double m_x, double c_x, double m_y, double c_y, bool logits,
-                float mask_threshold, cv::Size depth_size, Instance* inst) {
+                float mask_threshold, cv::Size depth_size, MaskPool* pool, Instance* inst) {
   const cv::Rect& box = inst->box;
   const cv::Matx23d M(m_x, 0, m_x * box.x + c_x, 0, m_y, m_y * box.y + c_y);
   cv::Mat roi;
@@ -70,9 +70,13 @@ bool sampleMask(const cv::Mat& values, double m_x, double c_x, double m_y, doubl
   clampProbability(&roi);
   cv::Mat binary = roi >= mask_threshold;  // 255 / 0
   if (cv::countNonZero(binary) == 0) return false;
-  inst->probability = cv::Mat::zeros(depth_size, CV_32F);
+  if (pool) {
+    pool->acquire(depth_size, &inst->probability, &inst->mask);
+  } else {
+    inst->probability = cv::Mat::zeros(depth_size, CV_32F);
+    inst->mask = cv::Mat::zeros(depth_size, CV_8U);
+  }
   roi.copyTo(inst->probability(box));
-  inst->mask = cv::Mat::zeros(depth_size, CV_8U);
   cv::Mat mask_roi = inst->mask(box);
   binary.convertTo(mask_roi, CV_8U, 1.0 / 255.0);
   return true;
@@ -93,6 +97,33 @@ cv::Rect depthBox(double x1, double y1, double x2, double y2, const InputToDepth
 }
 
 }  // namespace
+
+void MaskPool::acquire(cv::Size size, cv::Mat* probability, cv::Mat* mask) {
+  for (size_t i = free_.size(); i-- > 0;) {
+    Entry& e = free_[i];
+    if (e.probability.size() != size) continue;
+    e.probability(e.dirty).setTo(0);
+    e.mask(e.dirty).setTo(0);
+    *probability = std::move(e.probability);
+    *mask = std::move(e.mask);
+    free_.erase(free_.begin() + static_cast<std::ptrdiff_t>(i));
+    return;
+  }
+  *probability = cv::Mat::zeros(size, CV_32F);
+  *mask = cv::Mat::zeros(size, CV_8U);
+}
+
+void MaskPool::recycle(Instance* inst) {
+  auto sole = [](const cv::Mat& m) { return m.u != nullptr && m.u->refcount == 1; };
+  const cv::Rect whole(0, 0, inst->probability.cols, inst->probability.rows);
+  if (free_.size() < kMaxBuffers && sole(inst->probability) && sole(inst->mask) &&
+      inst->probability.type() == CV_32F && inst->mask.type() == CV_8U &&
+      inst->probability.isContinuous() && inst->mask.size() == inst->probability.size()) {
+    free_.push_back({std::move(inst->probability), std::move(inst->mask), inst->box & whole});
+  }
+  inst->probability.release();
+  inst->mask.release();
+}
 
 Letterbox computeLetterbox(cv::Size image, cv::Size input) {
   if (image.width <= 0 || image.height <= 0 || input.width <= 0 || input.height <= 0) {
@@ -288,7 +319,7 @@ std::vector<int> nmsPerClass(const std::vector<cv::Rect2d>& boxes, const std::ve
 }
 
 std::vector<Instance> decodeYolo(const YoloTensors& t, int num_classes, const DecodeParams& p,
-                                 const Letterbox& lb, cv::Size depth_size) {
+                                 const Letterbox& lb, cv::Size depth_size, MaskPool* pool) {
   const int channels = t.predictions.size[1], n = t.predictions.size[2];
   const int nm = t.prototypes.size[1], mh = t.prototypes.size[2], mw = t.prototypes.size[3];
   CV_Assert(channels == 4 + num_classes + nm && t.predictions.isContinuous() &&
@@ -356,7 +387,7 @@ std::vector<Instance> decodeYolo(const YoloTensors& t, int num_classes, const De
       cv::scaleAdd(plane(region), coefficient, logits, logits);
     }
     if (sampleMask(logits, mx, cx0 - region.x, my, cy0 - region.y, /*logits=*/true,
-                   p.mask_threshold, depth_size, &inst)) {
+                   p.mask_threshold, depth_size, pool, &inst)) {
       out.push_back(std::move(inst));
     }
   }
@@ -365,7 +396,7 @@ std::vector<Instance> decodeYolo(const YoloTensors& t, int num_classes, const De
 
 std::vector<Instance> decodeMaskRcnn(const MaskRcnnTensors& t, int num_classes,
                                      const DecodeParams& p, const Letterbox& lb,
-                                     cv::Size depth_size) {
+                                     cv::Size depth_size, MaskPool* pool) {
   const int n = t.boxes.size[0];
   const int mh = t.masks.size[t.masks.dims - 2], mw = t.masks.size[t.masks.dims - 1];
   const std::vector<float> labels = vectorValues(t.labels), scores_all = vectorValues(t.scores);
@@ -409,7 +440,8 @@ std::vector<Instance> decodeMaskRcnn(const MaskRcnnTensors& t, int num_classes,
     const cv::Mat mask(
         mh, mw, CV_32F,
         const_cast<float*>(t.masks.ptr<float>()) + static_cast<size_t>(index[k]) * mh * mw);
-    if (sampleMask(mask, mx, cx0, my, cy0, p.mask_logits, p.mask_threshold, depth_size, &inst)) {
+    if (sampleMask(mask, mx, cx0, my, cy0, p.mask_logits, p.mask_threshold, depth_size, pool,
+                   &inst)) {
       out.push_back(std::move(inst));
     }
   }

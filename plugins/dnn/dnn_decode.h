@@ -61,6 +61,27 @@ struct Instance {
   cv::Mat mask;         // CV_8U depth size, 1 where probability >= mask_threshold
 };
 
+/// Depth-size mask buffers recycled between frames: a buffer comes back zero everywhere while
+/// clearing only the box last written into it, so a frame with 20 instances neither allocates
+/// nor clears 20 full images. Not thread-safe (one per detector).
+class MaskPool {
+ public:
+  /// Zeroed buffers of `size`: *probability CV_32F, *mask CV_8U.
+  void acquire(cv::Size size, cv::Mat* probability, cv::Mat* mask);
+  /// Takes back the buffers of `inst` (non-zero only inside inst->box) when nothing else
+  /// references them; leaves inst's Mats empty.
+  void recycle(Instance* inst);
+  size_t size() const { return free_.size(); }
+
+ private:
+  struct Entry {
+    cv::Mat probability, mask;
+    cv::Rect dirty;  // the only region that may be non-zero
+  };
+  static constexpr size_t kMaxBuffers = 64;
+  std::vector<Entry> free_;
+};
+
 /// A network output with the name the model gives it.
 struct NamedOutput {
   std::string name;
@@ -103,14 +124,15 @@ std::vector<int> nmsPerClass(const std::vector<cv::Rect2d>& boxes, const std::ve
 /// Decodes the YOLO layout into instances in the depth image (score threshold, per-class NMS,
 /// coefficients x prototypes, bilinear resampling of the logits at the depth pixel centres,
 /// sigmoid, crop to the box). Instances whose box or mask is empty in the depth image are
-/// dropped.
+/// dropped. Mask buffers come from `pool` when given.
 std::vector<Instance> decodeYolo(const YoloTensors& t, int num_classes, const DecodeParams& p,
-                                 const Letterbox& lb, cv::Size depth_size);
+                                 const Letterbox& lb, cv::Size depth_size,
+                                 MaskPool* pool = nullptr);
 
 /// Decodes the Mask R-CNN layout like decodeYolo (each mask covers its box). Throws DnnError
 /// (EMF_ERROR_CONFIG) when a kept label is not an index into the `num_classes` names.
 std::vector<Instance> decodeMaskRcnn(const MaskRcnnTensors& t, int num_classes,
                                      const DecodeParams& p, const Letterbox& lb,
-                                     cv::Size depth_size);
+                                     cv::Size depth_size, MaskPool* pool = nullptr);
 
 }  // namespace emf_dnn

@@ -191,12 +191,17 @@ std::vector<Instance> DnnDetector::detect(const cv::Mat& bgr, cv::Size depth_siz
   try {
     if (options_.layout == Layout::kYoloV8) {
       return decodeYolo(identifyYolo(outputs, nc, "'" + options_.classes_path + "'"), nc, p, lb,
-                        depth_size);
+                        depth_size, &mask_pool_);
     }
-    return decodeMaskRcnn(identifyMaskRcnn(outputs), nc, p, lb, depth_size);
+    return decodeMaskRcnn(identifyMaskRcnn(outputs), nc, p, lb, depth_size, &mask_pool_);
   } catch (const DnnError& e) {
     throw DnnError(e.status(), "dnn: model '" + options_.model_path + "': " + e.what());
   }
+}
+
+void DnnDetector::recycle(std::vector<Instance>* instances) {
+  for (Instance& inst : *instances) mask_pool_.recycle(&inst);
+  instances->clear();
 }
 
 }  // namespace emf_dnn

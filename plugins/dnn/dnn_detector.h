@@ -33,6 +33,9 @@ class DnnDetector {
   /// `depth_size` pixels. Throws DnnError or cv::Exception.
   std::vector<Instance> detect(const cv::Mat& bgr, cv::Size depth_size);
 
+  /// Hands the mask buffers of instances the caller is done with back for the next frames.
+  void recycle(std::vector<Instance>* instances);
+
   const std::vector<std::string>& classNames() const { return names_; }
   /// The target actually used (may be kCpu after an OpenCL fallback).
   Target target() const { return target_; }
@@ -52,6 +55,7 @@ class DnnDetector {
   std::vector<std::string> warnings_;
   cv::Mat letterboxed_, blob_;         // reused per frame
   std::vector<cv::Mat> output_blobs_;  // reused per frame
+  MaskPool mask_pool_;
 };
 
 }  // namespace emf_dnn

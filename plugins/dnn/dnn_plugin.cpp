@@ -130,7 +130,11 @@ emf_status detect(emf_detector* det, const emf_detector_frame* frame, emf_detect
 }
 
 void release(emf_detector* det, emf_detection_result* result) {
-  if (det && result) det->live.erase(result);
+  if (!det || !result) return;
+  const auto it = det->live.find(result);
+  if (it == det->live.end()) return;
+  det->dnn->recycle(&it->second->instances);  // the mask buffers serve the next frames
+  det->live.erase(it);
 }
 
 void destroy(emf_detector* det) { delete det; }
