@@ -153,7 +153,9 @@ cv::Mat referenceYoloProbability(YoloCase& yc, float c0, float c1, const cv::Rec
   return p;
 }
 
-TEST(DnnDecodeYolo, BoxesMasksAndProbabilities) {
+/// Object 1: a square prototype shape; object 2: a ramp; plus a suppressed duplicate and a
+/// candidate below the score threshold.
+YoloCase squareAndRampCase() {
   YoloCase yc;
   // Prototype 0: logit 3 on proto pixels x 2..7, y 4..9 (input x 8..32, y 16..40), else -3.
   yc.plane(0).setTo(-3.f);
@@ -168,6 +170,11 @@ TEST(DnnDecodeYolo, BoxesMasksAndProbabilities) {
   // Same class as object 1, overlapping: suppressed. Below threshold: ignored.
   yc.anchor(2, {9, 17, 32, 24}, 2, 0.5f, 1.f, 0.f);
   yc.anchor(3, {0, 8, 64, 48}, 1, 0.2f, 0.f, 1.f);
+  return yc;
+}
+
+TEST(DnnDecodeYolo, BoxesMasksAndProbabilities) {
+  YoloCase yc = squareAndRampCase();
   const Letterbox lb = computeLetterbox({64, 48}, {64, 64});
   DecodeParams params;
   const auto out = decodeYolo({yc.pred, yc.protos}, kNumClasses, params, lb, {64, 48});
@@ -201,7 +208,8 @@ TEST(DnnDecodeYolo, BoxesMasksAndProbabilities) {
   EXPECT_LT(n2, out[1].box.area());
 }
 
-TEST(DnnDecodeYolo, ClipsBoxesAndDropsEmptyMasks) {
+/// Boxes partly outside the image, an all-negative mask and a box in the padding.
+YoloCase clipCase() {
   YoloCase yc;
   yc.plane(0).setTo(4.f);
   yc.plane(1).setTo(-4.f);
@@ -210,11 +218,56 @@ TEST(DnnDecodeYolo, ClipsBoxesAndDropsEmptyMasks) {
   // Mask all below threshold: dropped. Box entirely in the top padding: dropped.
   yc.anchor(1, {40, 20, 10, 10}, 0, 0.9f, 0.f, 1.f);
   yc.anchor(2, {40, 0, 10, 6}, 2, 0.95f, 1.f, 0.f);
+  return yc;
+}
+
+TEST(DnnDecodeYolo, ClipsBoxesAndDropsEmptyMasks) {
+  YoloCase yc = clipCase();
   const auto out = decodeYolo({yc.pred, yc.protos}, kNumClasses, {},
                               computeLetterbox({64, 48}, {64, 64}), {64, 48});
   ASSERT_EQ(out.size(), 1u);
   EXPECT_EQ(out[0].box, cv::Rect(0, 22, 20, 26));
   EXPECT_EQ(cv::countNonZero(out[0].mask), 20 * 26);
+}
+
+TEST(DnnMaskPool, RecycledBuffersComeBackZero) {
+  MaskPool pool;
+  Instance a;
+  a.box = cv::Rect(2, 3, 4, 5);
+  pool.acquire({16, 12}, &a.probability, &a.mask);
+  ASSERT_EQ(a.probability.size(), cv::Size(16, 12));
+  EXPECT_EQ(cv::countNonZero(a.probability), 0);
+  a.probability(a.box).setTo(0.7f);
+  a.mask(a.box).setTo(1);
+  const float* data = a.probability.ptr<float>();
+  pool.recycle(&a);
+  EXPECT_TRUE(a.probability.empty());
+  EXPECT_EQ(pool.size(), 1u);
+  Instance b;
+  pool.acquire({16, 12}, &b.probability, &b.mask);
+  EXPECT_EQ(b.probability.ptr<float>(), data);  // the same buffer, cleared
+  EXPECT_EQ(cv::countNonZero(b.probability), 0);
+  EXPECT_EQ(cv::countNonZero(b.mask), 0);
+  EXPECT_EQ(pool.size(), 0u);
+  // A buffer still referenced elsewhere is not taken back.
+  b.box = cv::Rect(0, 0, 16, 12);
+  const cv::Mat kept = b.probability;
+  pool.recycle(&b);
+  EXPECT_EQ(pool.size(), 0u);
+  // Decoding into recycled buffers gives what fresh buffers give.
+  YoloCase first = squareAndRampCase(), second = clipCase();
+  const Letterbox lb = computeLetterbox({64, 48}, {64, 64});
+  auto warm = decodeYolo({first.pred, first.protos}, kNumClasses, {}, lb, {64, 48}, &pool);
+  ASSERT_EQ(warm.size(), 2u);
+  for (auto& inst : warm) pool.recycle(&inst);
+  EXPECT_EQ(pool.size(), 2u);
+  const auto pooled =
+      decodeYolo({second.pred, second.protos}, kNumClasses, {}, lb, {64, 48}, &pool);
+  const auto fresh = decodeYolo({second.pred, second.protos}, kNumClasses, {}, lb, {64, 48});
+  ASSERT_EQ(pooled.size(), 1u);
+  ASSERT_EQ(fresh.size(), 1u);
+  EXPECT_EQ(cv::countNonZero(pooled[0].probability != fresh[0].probability), 0);
+  EXPECT_EQ(cv::countNonZero(pooled[0].mask != fresh[0].mask), 0);
 }
 
 TEST(DnnIdentify, YoloShapesAndClassCount) {
