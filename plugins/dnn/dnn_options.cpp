@@ -1,5 +1,7 @@
 #include "dnn_options.h"
 
+#include <dlfcn.h>
+
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -42,6 +44,17 @@ int parseInt(const std::string& key, const std::string& value, int lo, int hi) {
 }
 
 bool fileExists(const std::string& path) { return std::ifstream(path).good(); }
+
+/// Where the installed names are relative to this plugin's shared object (so an installation
+/// moved to another prefix still finds them); "" when this code is not in a shared object.
+std::string besideThisLibrary(const std::string& relative) {
+  static const int kAnchor = 0;
+  Dl_info info{};
+  if (dladdr(&kAnchor, &info) == 0 || !info.dli_fname) return "";
+  const std::string self = info.dli_fname;
+  const size_t slash = self.rfind('/');
+  return slash == std::string::npos ? "" : self.substr(0, slash + 1) + relative;
+}
 
 }  // namespace
 
@@ -111,12 +124,15 @@ DnnOptions DnnOptions::parse(const std::string& config) {
 }
 
 std::string defaultClassesPath() {
-  for (const char* path : {EMF_DNN_CLASSES_INSTALLED, EMF_DNN_CLASSES_SOURCE}) {
+  const std::string candidates[] = {besideThisLibrary(EMF_DNN_CLASSES_FROM_PLUGIN),
+                                    EMF_DNN_CLASSES_INSTALLED, EMF_DNN_CLASSES_SOURCE};
+  std::string tried;
+  for (const std::string& path : candidates) {
+    if (path.empty()) continue;
     if (fileExists(path)) return path;
+    tried += (tried.empty() ? "" : ", ") + path;
   }
-  throw DnnError(EMF_ERROR_CONFIG, std::string("dnn: the shipped class names are missing (") +
-                                       EMF_DNN_CLASSES_INSTALLED + " and " +
-                                       EMF_DNN_CLASSES_SOURCE +
+  throw DnnError(EMF_ERROR_CONFIG, "dnn: the shipped class names are missing (looked for " + tried +
                                        "); pass classes=/path/to/names.txt (one name per line)");
 }
 
