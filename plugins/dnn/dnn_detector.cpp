@@ -120,17 +120,18 @@ DnnDetector::DnnDetector(const DnnOptions& options) : options_(options) {
   // outputs match no layout, fails here, at load time, rather than on the first frame.
   const int w = options_.input_width_px, h = options_.input_height_px;
   const cv::Mat blank(std::vector<int>{1, 3, h, w}, CV_32F, cv::Scalar(kLetterboxPad / 255.0));
+  const std::string failed = "dnn: model '" + model + "' failed its first forward pass on a 1x3x" +
+                             std::to_string(h) + "x" + std::to_string(w) +
+                             " input (input=" + std::to_string(w) + "x" + std::to_string(h) + "): ";
+  const std::string hint =
+      ". Either the model was exported for another input size (set input=WxH to it), or it "
+      "has operations this OpenCV cannot run (YOLOv8/YOLO11 exports on OpenCV 4.6: convert the "
+      "model with scripts/onnx_for_opencv.py)";
   std::vector<NamedOutput> outputs;
   try {
     outputs = forward(blank);
   } catch (const cv::Exception& e) {
-    if (target_ != Target::kOpenCl) {
-      throw DnnError(EMF_ERROR_CONFIG,
-                     "dnn: model '" + model + "' does not accept a 1x3x" + std::to_string(h) + "x" +
-                         std::to_string(w) + " input (input=" + std::to_string(w) + "x" +
-                         std::to_string(h) + "): " + cvMessage(e) +
-                         "; set input=WxH to the size the model was exported with");
-    }
+    if (target_ != Target::kOpenCl) throw DnnError(EMF_ERROR_CONFIG, failed + cvMessage(e) + hint);
     warn("dnn: target=opencl: OpenCV's OpenCL forward pass failed (" + cvMessage(e) +
          "); running the network on the CPU");
     target_ = Target::kCpu;
@@ -138,11 +139,7 @@ DnnDetector::DnnDetector(const DnnOptions& options) : options_(options) {
     try {
       outputs = forward(blank);
     } catch (const cv::Exception& e2) {
-      throw DnnError(EMF_ERROR_CONFIG, "dnn: model '" + model + "' does not accept a 1x3x" +
-                                           std::to_string(h) + "x" + std::to_string(w) +
-                                           " input: " + cvMessage(e2) +
-                                           "; set input=WxH to the size the model was "
-                                           "exported with");
+      throw DnnError(EMF_ERROR_CONFIG, failed + cvMessage(e2) + hint);
     }
   }
   checkOutputs(outputs);

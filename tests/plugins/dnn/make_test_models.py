@@ -46,9 +46,10 @@ def shape_at(obj, x, y):
     return inside(obj["add"], x, y) & ~inside(obj.get("sub", []), x, y)
 
 
-def save_model(path, input_w, input_h, outputs):
+def save_model(path, input_w, input_h, outputs, head_nodes=(), head_inits=(), graph_outputs=None):
     """A model taking images [1, 3, input_h, input_w] and emitting the constant `outputs`
-    (list of (name, array))."""
+    (list of (name, array)); `head_nodes` may compute the graph outputs (`graph_outputs`:
+    list of (name, shape)) from those constants instead."""
     nodes = [
         helper.make_node("Reshape", ["images", "input_shape"], ["fixed"]),
         helper.make_node("GlobalAveragePool", ["fixed"], ["pooled"]),
@@ -70,6 +71,11 @@ def save_model(path, input_w, input_h, outputs):
             numpy_helper.from_array(np.array(value.shape, np.int64), "s_" + name),
         ]
         infos.append(helper.make_tensor_value_info(name, TensorProto.FLOAT, list(value.shape)))
+    nodes += list(head_nodes)
+    inits += list(head_inits)
+    if graph_outputs is not None:
+        infos = [helper.make_tensor_value_info(n, TensorProto.FLOAT, list(shape))
+                 for n, shape in graph_outputs]
     graph = helper.make_graph(
         nodes, "emf_dnn_test",
         [helper.make_tensor_value_info("images", TensorProto.FLOAT, [1, 3, input_h, input_w])],
@@ -181,6 +187,85 @@ def maskrcnn_model(out_dir, rng):
     save_truth(os.path.join(out_dir, "maskrcnn.json"), input_w, input_h, truth_objs)
 
 
+def yolo_head_model(out_dir, rng):
+    """A YOLOv8-seg export's head in miniature, with the ops a real export has: Split of the
+    head features, the DFL (Reshape, Transpose, Softmax, Conv), box decoding against the anchor
+    grid (Sub, Add, Div, Concat), the strides Mul with a [1, N] constant that OpenCV 4.6 cannot
+    broadcast (scripts/onnx_for_opencv.py converts it), Sigmoid of the class logits, Concat.
+    The head features are constants encoding two objects. Input 320x320 (frame scale 0.5,
+    pad_y 40), stride 8 (40x40 anchors), prototypes 80x80."""
+    input_w = input_h = 320
+    stride, grid, reg, nc, nm = 8, 40, 16, 80, 32
+    n = grid * grid
+    mh = mw = input_h // 4
+    s, px, py = letterbox(input_w, input_h)
+    feat = np.zeros((1, 4 * reg + nc + nm, n), np.float32)
+    feat[0, 4 * reg:4 * reg + nc] = -6.0  # class logits: sigmoid 0.0025, below any threshold
+    feat[0, 4 * reg + nc:] = rng.uniform(-1, 1, (nm, n))
+
+    gx = ((np.arange(mw) + 0.5) * (input_w / mw) - px) / s
+    gy = ((np.arange(mh) + 0.5) * (input_h / mh) - py) / s
+    X, Y = np.meshgrid(gx, gy)
+    # Frame boxes from anchor cell (i, j) and DFL distances (l, t, r, b) in grid cells.
+    person = {"class_id": 0, "class_name": "person", "score": 0.91, "cell": (12, 17),
+              "dist": (6, 9, 8, 7), "add": [[184, 56, 248, 120], [104, 120, 328, 312]]}
+    cup = {"class_id": 41, "class_name": "cup", "score": 0.78, "cell": (30, 25),
+           "dist": (3, 2, 4, 5), "add": [[424, 288, 560, 416]], "sub": [[472, 328, 512, 368]]}
+    protos = rng.uniform(-1, 1, (1, nm, mh, mw)).astype(np.float32)
+    protos[0, 2] = 1.0
+    for k, (obj, coeffs) in enumerate([(person, [1.0, 0.0, 0.5]), (cup, [0.0, 1.0, -0.5])]):
+        i, j = obj["cell"]
+        l, t, r, b = obj["dist"]
+        ax, ay = (i + 0.5) * stride, (j + 0.5) * stride  # input pixels
+        x1, y1, x2, y2 = ax - l * stride, ay - t * stride, ax + r * stride, ay + b * stride
+        obj["box"] = [(x1 - px) / s, (y1 - py) / s, (x2 - px) / s, (y2 - py) / s]
+        a = j * grid + i
+        for side, d in enumerate((l, t, r, b)):
+            feat[0, side * reg:(side + 1) * reg, a] = 0.0
+            feat[0, side * reg + d, a] = 30.0  # softmax ~ one-hot: distance d
+        feat[0, 4 * reg + obj["class_id"], a] = np.log(obj["score"] / (1 - obj["score"]))
+        c = rng.uniform(-0.02, 0.02, nm)
+        c[:3] = coeffs
+        feat[0, 4 * reg + nc:, a] = c
+        protos[0, k] = np.where(shape_at(obj, X, Y), LOGIT, -LOGIT)
+        del obj["cell"], obj["dist"]
+
+    ax, ay = np.meshgrid(np.arange(grid) + 0.5, np.arange(grid) + 0.5)
+    anchors = np.stack([ax.ravel(), ay.ravel()])[None].astype(np.float32)  # [1, 2, n]
+    node = helper.make_node
+    head = [
+        node("Split", ["feat"], ["box", "cls", "mc"], axis=1, split=[4 * reg, nc, nm]),
+        node("Reshape", ["box", "dfl_shape"], ["box4"]),
+        node("Transpose", ["box4"], ["box_t"], perm=[0, 2, 1, 3]),
+        node("Softmax", ["box_t"], ["box_p"], axis=1),
+        node("Conv", ["box_p", "dfl_w"], ["dist_c"], kernel_shape=[1, 1]),
+        node("Reshape", ["dist_c", "dist_shape"], ["dist"]),
+        node("Split", ["dist"], ["lt", "rb"], axis=1, split=[2, 2]),
+        node("Sub", ["anchors", "lt"], ["x1y1"]),
+        node("Add", ["anchors", "rb"], ["x2y2"]),
+        node("Add", ["x1y1", "x2y2"], ["sum_xy"]),
+        node("Div", ["sum_xy", "two"], ["cxy"]),
+        node("Sub", ["x2y2", "x1y1"], ["wh"]),
+        node("Concat", ["cxy", "wh"], ["dbox_cells"], axis=1),
+        node("Mul", ["dbox_cells", "strides"], ["dbox"]),
+        node("Sigmoid", ["cls"], ["scores"]),
+        node("Concat", ["dbox", "scores", "mc"], ["output0"], axis=1),
+        node("Identity", ["protos"], ["output1"]),
+    ]
+    inits = [
+        numpy_helper.from_array(np.array([1, 4, reg, n], np.int64), "dfl_shape"),
+        numpy_helper.from_array(np.arange(reg, dtype=np.float32).reshape(1, reg, 1, 1), "dfl_w"),
+        numpy_helper.from_array(np.array([1, 4, n], np.int64), "dist_shape"),
+        numpy_helper.from_array(anchors, "anchors"),
+        numpy_helper.from_array(np.array([2.0], np.float32), "two"),
+        numpy_helper.from_array(np.full((1, n), float(stride), np.float32), "strides"),
+    ]
+    save_model(os.path.join(out_dir, "yolov8_head.onnx"), input_w, input_h,
+               [("feat", feat), ("protos", protos)], head, inits,
+               [("output0", (1, 4 + nc + nm, n)), ("output1", (1, nm, mh, mw))])
+    save_truth(os.path.join(out_dir, "yolov8_head.json"), input_w, input_h, [person, cup])
+
+
 def main():
     if len(sys.argv) != 2:
         sys.exit("usage: make_test_models.py <output folder>")
@@ -189,6 +274,7 @@ def main():
     rng = np.random.default_rng(8)
     yolo_model(out_dir, rng)
     maskrcnn_model(out_dir, rng)
+    yolo_head_model(out_dir, rng)
 
 
 if __name__ == "__main__":
