@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <map>
 #include <opencv2/dnn.hpp>
 #include <opencv2/imgproc.hpp>
@@ -45,41 +46,72 @@ std::vector<float> vectorValues(const cv::Mat& m) {
   return std::vector<float>(f.begin<float>(), f.end<float>());
 }
 
-/// Clamps to [0, 1], NaN -> 0 (the host rejects probabilities outside [0, 1]).
-void clampProbability(cv::Mat* p) {
-  cv::patchNaNs(*p, 0.0);
-  cv::max(*p, 0.0, *p);
-  cv::min(*p, 1.0, *p);
+/// One axis of the bilinear sampling: neighbours i0, i1 and weight f of i1 at index `x` in
+/// [0, n), the border replicated.
+struct Tap {
+  int i0 = 0, i1 = 0;
+  float f = 0;
+};
+Tap tap(double x, int n) {
+  if (!(x > 0.0)) return {0, 0, 0.f};  // also NaN
+  if (x >= n - 1) return {n - 1, n - 1, 0.f};
+  const int i0 = static_cast<int>(x);
+  return {i0, i0 + 1, static_cast<float>(x - i0)};
 }
 
-/// Fills inst->probability/mask inside inst->box by bilinear sampling of `values` (CV_32F) at
-/// the depth pixel centres: for depth pixel u, src index x = m_x * u + c_x (same for y),
-/// where the src index space is that of `values` (pixel centres at integers).
-/// `logits` applies the sigmoid after sampling. Returns false when the mask is empty.
+/// Fills inst->probability/mask inside inst->box by bilinear sampling of `values` (CV_32F,
+/// border replicated) at the depth pixel centres: for depth pixel u, src index
+/// x = m_x * u + c_x (same for y), pixel centres of `values` at integer indices. `logits`
+/// applies the sigmoid after sampling; probabilities are clamped to [0, 1] (NaN -> 0) for the
+/// host. The mapping is axis-aligned, so the taps are computed once per column and per row.
+/// Returns false (buffers handed back) when no pixel reaches mask_threshold.
 bool sampleMask(const cv::Mat& values, double m_x, double c_x, double m_y, double c_y, bool logits,
                 float mask_threshold, cv::Size depth_size, MaskPool* pool, Instance* inst) {
   const cv::Rect& box = inst->box;
-  const cv::Matx23d M(m_x, 0, m_x * box.x + c_x, 0, m_y, m_y * box.y + c_y);
-  cv::Mat roi;
-  cv::warpAffine(values, roi, M, box.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
-                 cv::BORDER_REPLICATE);
-  if (logits) {
-    cv::exp(-roi, roi);
-    roi = 1.0 / (1.0 + roi);
+  std::vector<Tap> cols(static_cast<size_t>(box.width));
+  for (int i = 0; i < box.width; ++i) cols[i] = tap(m_x * (box.x + i) + c_x, values.cols);
+  cv::Mat roi(box.size(), CV_32F);
+  const float sign = logits ? -1.f : 1.f;  // logits: sample -x, then exp, then 1 / (1 + .)
+  for (int j = 0; j < box.height; ++j) {
+    const Tap r = tap(m_y * (box.y + j) + c_y, values.rows);
+    const float* row0 = values.ptr<float>(r.i0);
+    const float* row1 = values.ptr<float>(r.i1);
+    float* out = roi.ptr<float>(j);
+    for (int i = 0; i < box.width; ++i) {
+      const Tap& c = cols[static_cast<size_t>(i)];
+      const float a = row0[c.i0] + (row0[c.i1] - row0[c.i0]) * c.f;
+      const float b = row1[c.i0] + (row1[c.i1] - row1[c.i0]) * c.f;
+      out[i] = sign * (a + (b - a) * r.f);
+    }
   }
-  clampProbability(&roi);
-  cv::Mat binary = roi >= mask_threshold;  // 255 / 0
-  if (cv::countNonZero(binary) == 0) return false;
+  if (logits) cv::exp(roi, roi);  // vectorised
   if (pool) {
     pool->acquire(depth_size, &inst->probability, &inst->mask);
   } else {
     inst->probability = cv::Mat::zeros(depth_size, CV_32F);
     inst->mask = cv::Mat::zeros(depth_size, CV_8U);
   }
-  roi.copyTo(inst->probability(box));
-  cv::Mat mask_roi = inst->mask(box);
-  binary.convertTo(mask_roi, CV_8U, 1.0 / 255.0);
-  return true;
+  int in_mask = 0;
+  for (int j = 0; j < box.height; ++j) {
+    const float* v = roi.ptr<float>(j);
+    float* prob = inst->probability.ptr<float>(box.y + j) + box.x;
+    uint8_t* mask = inst->mask.ptr<uint8_t>(box.y + j) + box.x;
+    for (int i = 0; i < box.width; ++i) {
+      float p = logits ? 1.f / (1.f + v[i]) : v[i];
+      p = p >= 0.f ? std::min(p, 1.f) : 0.f;  // NaN -> 0
+      prob[i] = p;
+      mask[i] = p >= mask_threshold ? 1 : 0;
+      in_mask += mask[i];
+    }
+  }
+  if (in_mask > 0) return true;
+  if (pool) {
+    pool->recycle(inst);
+  } else {
+    inst->probability.release();
+    inst->mask.release();
+  }
+  return false;
 }
 
 /// The depth-pixel box of an input-pixel box (corners rounded), clipped to the image.
@@ -327,27 +359,25 @@ std::vector<Instance> decodeYolo(const YoloTensors& t, int num_classes, const De
   const float* pred = t.predictions.ptr<float>();
   auto row = [&](int c) { return pred + static_cast<size_t>(c) * n; };
 
-  // Best class per anchor, walking the class rows (contiguous) rather than the anchors.
-  std::vector<float> best(row(4), row(4) + n);
-  std::vector<int> best_class(n, 0);
-  for (int c = 1; c < num_classes; ++c) {
-    const float* s = row(4 + c);
-    for (int i = 0; i < n; ++i) {
-      if (s[i] > best[i]) {
-        best[i] = s[i];
-        best_class[i] = c;
-      }
-    }
-  }
+  // Best score per anchor over the class rows (vectorised); the arg max only for the few
+  // anchors above the threshold.
+  const cv::Mat class_scores(num_classes, n, CV_32F, const_cast<float*>(row(4)));
+  cv::Mat best_row;
+  cv::reduce(class_scores, best_row, 0, cv::REDUCE_MAX);
+  const float* best = best_row.ptr<float>();
   std::vector<cv::Rect2d> boxes;
   std::vector<float> scores;
   std::vector<int> classes, anchors;
   const float *cx = row(0), *cy = row(1), *w = row(2), *h = row(3);
   for (int i = 0; i < n; ++i) {
     if (!(best[i] >= p.score_threshold) || !(w[i] > 0.f) || !(h[i] > 0.f)) continue;
+    int best_class = 0;
+    for (int c = 1; c < num_classes; ++c) {
+      if (row(4 + c)[i] > row(4 + best_class)[i]) best_class = c;
+    }
     boxes.emplace_back(cx[i] - 0.5 * w[i], cy[i] - 0.5 * h[i], w[i], h[i]);
     scores.push_back(std::min(best[i], 1.f));
-    classes.push_back(best_class[i]);
+    classes.push_back(best_class);
     anchors.push_back(i);
   }
   const std::vector<int> kept =

@@ -20,7 +20,7 @@ namespace {
 
 constexpr double kCoordTolerance = 1e-9;  // closed-form coordinate maps
 constexpr float kBlobTolerance = 1e-6f;   // pixel / 255 in the blob
-constexpr float kProbTolerance = 1e-4f;  // vs the double reference (sample points on the 1/32 grid)
+constexpr float kProbTolerance = 1e-5f;   // float sampling vs the double reference
 constexpr int kNumClasses = 3, kNm = 2;
 
 float sigmoid(float x) { return 1.f / (1.f + std::exp(-x)); }
