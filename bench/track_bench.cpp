@@ -1,0 +1,316 @@
+// Tracking benchmark: prints ms per call and LM iterations of the tracker variants side by side
+// (paper settings, device vs host final reduction, early exit, coarse-to-fine), with their pose
+// errors, on synthetic frames with known motion and on the real TUM fr1/xyz pairs; plus the
+// preprocessing kernel and one accumulation pass. Figures only, never pass/fail.
+//
+// Usage: track_bench [--data DIR] [--trials N] [--quick] [--kernels-only]
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <functional>
+#include <opencv2/imgproc.hpp>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "track/preprocess.h"
+#include "track/tracker.h"
+#include "track_test_support.h"
+
+namespace {
+
+using emf::track::TrackOptions;
+using emf::track::TrackResult;
+using Clock = std::chrono::steady_clock;
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDeg = kPi / 180.0;
+
+double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+// CPU time of the whole process (all PoCL threads), ms: the work done, independent of how much
+// of the 2 shared cores the other processes on the machine leave us.
+double cpuMs() {
+  timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+struct Variant {
+  std::string name;
+  TrackOptions options;
+};
+
+std::vector<Variant> variants() {
+  std::vector<Variant> out;
+  TrackOptions paper;  // METHOD.md: tau 1e3, eps 1e-8, 100 iterations, all pixels
+  out.push_back({"paper-host", paper});
+  TrackOptions dev = paper;
+  dev.final_reduction = "device";
+  out.push_back({"paper-device", dev});
+  TrackOptions early = paper;
+  early.early_exit_step = 1e-5;
+  out.push_back({"early-exit", early});
+  TrackOptions c2f = early;
+  c2f.coarse_levels = 2;
+  c2f.coarse_max_iterations = 10;
+  out.push_back({"c2f", c2f});
+  TrackOptions c2f_tau = c2f;
+  c2f_tau.lm_tau = 1e-3;
+  out.push_back({"c2f-tau1e-3", c2f_tau});
+  TrackOptions stride2 = c2f;
+  stride2.pixel_stride = 2;
+  stride2.coarse_levels = 1;
+  out.push_back({"c2f-stride2", stride2});
+  TrackOptions stride4 = c2f;
+  stride4.pixel_stride = 4;
+  stride4.coarse_levels = 1;
+  out.push_back({"c2f-stride4", stride4});
+  return out;
+}
+
+Eigen::Isometry3d perturb(const Eigen::Isometry3d& T, std::mt19937& rng, double t_m,
+                          double angle_rad) {
+  Eigen::Isometry3d P = Eigen::Isometry3d::Identity();
+  P.linear() = emf::track::expSo3(emf::test::randomUnit(rng) * angle_rad);
+  P.translation() = emf::test::randomUnit(rng) * t_m;
+  return T * P;
+}
+
+struct Stats {
+  std::vector<double> ms, cpu_ms, iterations;
+  double max_t_mm = 0, max_r_deg = 0;
+  int lost = 0, runs = 0;
+  void add(double t_ms, double t_cpu_ms, const TrackResult& r, const Eigen::Isometry3d& T_gt) {
+    ms.push_back(t_ms);
+    cpu_ms.push_back(t_cpu_ms);
+    iterations.push_back(r.iterations);
+    const Eigen::Isometry3d e = T_gt.inverse() * r.T_volume_camera;
+    max_t_mm = std::max(max_t_mm, e.translation().norm() * 1000.0);
+    max_r_deg = std::max(max_r_deg, emf::track::rotationAngle(e) / kDeg);
+    lost += r.lost ? 1 : 0;
+    ++runs;
+  }
+  void print(const std::string& scene, const std::string& variant) const {
+    double mean_it = 0;
+    for (double i : iterations) mean_it += i;
+    mean_it /= std::max<size_t>(1, iterations.size());
+    std::printf("  %-14s %9.1f %9.1f %9.1f %8.1f %11.3f %11.4f %5d/%d\n", variant.c_str(),
+                median(ms), *std::min_element(ms.begin(), ms.end()), median(cpu_ms), mean_it,
+                max_t_mm, max_r_deg, lost, runs);
+    std::printf(
+        "track_bench scene=%s variant=%s ms=%.2f cpu_ms=%.2f iters=%.1f t_err_mm=%.3f "
+        "r_err_deg=%.4f lost=%d\n",
+        scene.c_str(), variant.c_str(), median(ms), median(cpu_ms), mean_it, max_t_mm, max_r_deg,
+        lost);
+  }
+};
+
+void header() {
+  std::printf("  %-14s %9s %9s %9s %8s %11s %11s %7s\n", "variant", "ms(med)", "ms(min)", "cpu ms",
+              "iters", "max t(mm)", "max r(deg)", "lost");
+}
+
+// Synthetic room: tracks `trials` perturbed starts with every variant.
+void syntheticScene(emf::cl::Context& ctx, const std::string& name, float voxel_m, int width,
+                    double t_m, double r_deg, int trials) {
+  const emf::test::AnalyticScene scene = emf::test::roomCornerScene();
+  const int blocks = static_cast<int>(std::lround(2.56 / voxel_m / 8));
+  const emf::test::HostVolume host =
+      emf::test::volumeFromSdf([&](const Eigen::Vector3f& x) { return scene.sdf(x); },
+                               Eigen::Vector3i::Constant(blocks), voxel_m, 10 * voxel_m, 10.0f);
+  const emf::test::DeviceVolume vol = emf::test::upload(ctx, host);
+  emf::io::Intrinsics k = emf::test::smallCamera();
+  k = k.scaled(width, width * 3 / 4);
+  const Eigen::Isometry3d T_gt = emf::test::roomCornerCamera();
+  const cv::Mat depth = scene.render(k, T_gt);
+  emf::track::Preprocessor pre(ctx, emf::track::PreprocessOptions{}, k);
+  pre.process(depth);
+  std::printf(
+      "\n%s: room corner + boxes, %dx%d, voxel %.0f mm, truncation %.0f mm, %d blocks, "
+      "starts %.0f mm / %.1f deg off (%d trials)\n",
+      name.c_str(), k.width, k.height, voxel_m * 1000, voxel_m * 10000, host.allocatedBlocks(),
+      t_m * 1000, r_deg, trials);
+  header();
+  for (const Variant& v : variants()) {
+    emf::track::Tracker tracker(ctx, v.options, k.width, k.height);
+    tracker.track(vol.view, pre.vertexMap().get(), nullptr, T_gt);  // warm-up (kernel build)
+    std::mt19937 rng(100);
+    Stats s;
+    for (int i = 0; i < trials; ++i) {
+      const Eigen::Isometry3d init = perturb(T_gt, rng, t_m, r_deg * kDeg);
+      const auto t0 = Clock::now();
+      const double c0 = cpuMs();
+      const TrackResult r = tracker.track(vol.view, pre.vertexMap().get(), nullptr, init);
+      s.add(msSince(t0), cpuMs() - c0, r, T_gt);
+    }
+    s.print(name, v.name);
+  }
+}
+
+void realPairs(emf::cl::Context& ctx, const std::string& data, int repeats) {
+  emf::io::Intrinsics k;
+  k.fx = k.fy = 525.0;
+  k.cx = 319.5;
+  k.cy = 239.5;
+  k.width = 640;
+  k.height = 480;
+  for (const char* c : {"case_1", "case_2"}) {
+    const std::string dir = data + "/tum-fr1-xyz-pairs/" + c;
+    const cv::Mat prev = emf::test::readDepthPng(dir + "/dep_prev.png", 5000.0);
+    const cv::Mat curr = emf::test::readDepthPng(dir + "/dep_curr.png", 5000.0);
+    const Eigen::Isometry3d gt = emf::test::readPoseTxt(dir + "/pose_prev.txt").inverse() *
+                                 emf::test::readPoseTxt(dir + "/pose_curr.txt");
+    emf::test::HostVolume host(Eigen::Vector3i(64, 64, 64), 0.01f, 0.1f);
+    Eigen::Isometry3d T_vp = Eigen::Isometry3d::Identity();
+    T_vp.translation() << 2.56, 2.56, 0.0;
+    emf::test::fuseDepth(&host, prev, k, T_vp, 64.0f);
+    const emf::test::DeviceVolume vol = emf::test::upload(ctx, host);
+    emf::track::Preprocessor pre(ctx, emf::track::PreprocessOptions{}, k);
+    pre.process(curr);
+    std::printf(
+        "\nreal %s: TUM fr1/xyz pair, 640x480, voxel 10 mm, volume of the first frame, "
+        "start at identity (true motion %.1f mm / %.2f deg); error vs mocap\n",
+        c, gt.translation().norm() * 1000, emf::track::rotationAngle(gt) / kDeg);
+    header();
+    for (const Variant& v : variants()) {
+      emf::track::Tracker tracker(ctx, v.options, k.width, k.height);
+      tracker.track(vol.view, pre.vertexMap().get(), nullptr, T_vp);  // warm-up
+      Stats s;
+      for (int i = 0; i < repeats; ++i) {
+        const auto t0 = Clock::now();
+        const double c0 = cpuMs();
+        const TrackResult r = tracker.track(vol.view, pre.vertexMap().get(), nullptr, T_vp);
+        s.add(msSince(t0), cpuMs() - c0, r, T_vp * gt);
+      }
+      s.print(std::string("fr1-") + c, v.name);
+    }
+  }
+}
+
+// One accumulation pass with each final reduction, and the preprocessing kernel: median wall
+// and CPU ms.
+void kernels(emf::cl::Context& ctx, const std::string& data, int repeats) {
+  const emf::test::AnalyticScene scene = emf::test::roomCornerScene();
+  const emf::test::HostVolume host =
+      emf::test::volumeFromSdf([&](const Eigen::Vector3f& x) { return scene.sdf(x); },
+                               Eigen::Vector3i::Constant(32), 0.01f, 0.1f, 10.0f);
+  const emf::test::DeviceVolume vol = emf::test::upload(ctx, host);
+  const cv::Mat real =
+      emf::test::readDepthPng(data + "/tum-fr1-xyz-pairs/case_1/dep_prev.png", 5000.0);
+  auto timeIt = [&](const std::function<void()>& f, double* wall, double* cpu) {
+    f();  // warm-up
+    std::vector<double> w, c;
+    for (int i = 0; i < repeats; ++i) {
+      const auto t0 = Clock::now();
+      const double c0 = cpuMs();
+      f();
+      c.push_back(cpuMs() - c0);
+      w.push_back(msSince(t0));
+    }
+    *wall = median(w);
+    *cpu = median(c);
+  };
+  std::printf("\nkernels (median of %d runs; wall ms / process CPU ms)\n", repeats);
+  std::printf("  %-9s %15s %15s %15s %15s %7s\n", "size", "preprocess", "eval:host-sum",
+              "eval:device-sum", "eval:stride2", "groups");
+  for (int width : {640, 320}) {
+    emf::io::Intrinsics k = emf::test::smallCamera().scaled(width, width * 3 / 4);
+    const cv::Mat depth = scene.render(k, emf::test::roomCornerCamera());
+    emf::track::Preprocessor pre(ctx, emf::track::PreprocessOptions{}, k);
+    cv::Mat real_scaled;
+    cv::resize(real, real_scaled, cv::Size(k.width, k.height), 0, 0, cv::INTER_NEAREST);
+    double w[4], c[4];
+    timeIt(
+        [&] {
+          pre.process(real_scaled);
+          ctx.finish();
+        },
+        &w[0], &c[0]);
+    pre.process(depth);
+    int groups = 0;
+    for (int mode = 0; mode < 3; ++mode) {
+      TrackOptions o;
+      o.final_reduction = mode == 1 ? "device" : "host";
+      const int stride = mode == 2 ? 2 : 1;
+      emf::track::Tracker tracker(ctx, o, k.width, k.height);
+      groups = tracker.numGroups(1);
+      timeIt(
+          [&] {
+            tracker.evaluate(vol.view, pre.vertexMap().get(), nullptr,
+                             emf::test::roomCornerCamera(), stride);
+          },
+          &w[mode + 1], &c[mode + 1]);
+    }
+    {
+      const emf::track::PreprocessedFrame f =
+          emf::track::preprocessReference(real_scaled, k, emf::track::PreprocessOptions{});
+      const emf::track::PreprocessedFrame g =
+          emf::track::preprocessReference(depth, k, emf::track::PreprocessOptions{});
+      double rw, rc, aw, ac;
+      timeIt([&] { emf::track::preprocessReference(real_scaled, k, {}); }, &rw, &rc);
+      timeIt(
+          [&] {
+            emf::track::accumulateReference(host.view(), g.vertex, cv::Mat(), 1,
+                                            emf::test::roomCornerCamera(), 0.02);
+          },
+          &aw, &ac);
+      std::printf("  CPU reference (1 thread): preprocess %.2f ms, accumulate %.2f ms\n", rc, ac);
+    }
+    std::printf("  %4dx%-4d %7.2f/%7.2f %7.2f/%7.2f %7.2f/%7.2f %7.2f/%7.2f %7d\n", k.width,
+                k.height, w[0], c[0], w[1], c[1], w[2], c[2], w[3], c[3], groups);
+    std::printf(
+        "track_bench kernels=%dx%d preprocess_ms=%.2f preprocess_cpu_ms=%.2f "
+        "eval_host_ms=%.2f eval_host_cpu_ms=%.2f eval_device_ms=%.2f "
+        "eval_device_cpu_ms=%.2f eval_stride2_ms=%.2f eval_stride2_cpu_ms=%.2f\n",
+        k.width, k.height, w[0], c[0], w[1], c[1], w[2], c[2], w[3], c[3]);
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string data = std::string(EMF_SOURCE_DIR) + "/../shared/data";
+  int trials = 6;
+  bool quick = false;
+  bool kernels_only = false;
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--data") && i + 1 < argc) {
+      data = argv[++i];
+    } else if (!std::strcmp(argv[i], "--trials") && i + 1 < argc) {
+      trials = std::max(1, std::atoi(argv[++i]));
+    } else if (!std::strcmp(argv[i], "--quick")) {
+      quick = true;
+    } else if (!std::strcmp(argv[i], "--kernels-only")) {
+      kernels_only = true;
+    } else {
+      std::fprintf(stderr,
+                   "usage: track_bench [--data DIR] [--trials N] [--quick] [--kernels-only]\n");
+      return 2;
+    }
+  }
+  try {
+    emf::cl::Context ctx(emf::cl::ClOptions{});
+    std::printf("track_bench on %s\n", ctx.device().describe().c_str());
+    kernels(ctx, data, quick ? 5 : 30);
+    if (kernels_only) return 0;
+    syntheticScene(ctx, "room-320-2cm", 0.02f, 320, 0.05, 5.0, trials);
+    syntheticScene(ctx, "room-640-1cm", 0.01f, 640, 0.02, 2.0, trials);
+    if (!quick) syntheticScene(ctx, "room-640-1cm-5cm5deg", 0.01f, 640, 0.05, 5.0, trials);
+    realPairs(ctx, data, quick ? 1 : 3);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "track_bench: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,145 @@
+#include "track/preprocess.h"
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "common/error.h"
+
+namespace emf::track {
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+bool depthInRange(float d, float min_depth, float max_depth) {
+  return !std::isnan(d) && d > 0.0f && d >= min_depth && d <= max_depth;
+}
+
+void checkIntrinsics(const io::Intrinsics& k) {
+  if (!k.valid()) {
+    std::ostringstream s;
+    s << "preprocessing: invalid intrinsics (fx " << k.fx << ", fy " << k.fy << ", " << k.width
+      << "x" << k.height << "): set source.fx/fy/cx/cy or fix the dataset's calibration";
+    throw InvalidArgument(s.str());
+  }
+}
+
+void checkDepth(const cv::Mat& depth_m, const io::Intrinsics& k) {
+  if (depth_m.type() != CV_32F || depth_m.cols != k.width || depth_m.rows != k.height) {
+    std::ostringstream s;
+    s << "preprocessing: depth image must be CV_32F metres of " << k.width << "x" << k.height
+      << " (the intrinsics' size), got type " << depth_m.type() << " of " << depth_m.cols << "x"
+      << depth_m.rows << ": convert raw depth with the source's depth_scale first";
+    throw InvalidArgument(s.str());
+  }
+}
+
+}  // namespace
+
+void validatePreprocessOptions(const PreprocessOptions& o) {
+  if (!(o.min_depth_m < o.max_depth_m)) {
+    std::ostringstream s;
+    s << "preprocess.min_depth_m (" << o.min_depth_m << ") must be below preprocess.max_depth_m ("
+      << o.max_depth_m << ")";
+    throw ConfigError(s.str());
+  }
+}
+
+PreprocessedFrame preprocessReference(const cv::Mat& depth_m, const io::Intrinsics& k,
+                                      const PreprocessOptions& o) {
+  checkIntrinsics(k);
+  checkDepth(depth_m, k);
+  validatePreprocessOptions(o);
+  const int w = k.width, h = k.height, r = o.bilateral_radius_px;
+  const float min_d = static_cast<float>(o.min_depth_m);
+  const float max_d = static_cast<float>(o.max_depth_m);
+  const float inv_s = static_cast<float>(1.0 / (2.0 * o.sigma_space_px * o.sigma_space_px));
+  const float inv_d = static_cast<float>(1.0 / (2.0 * o.sigma_depth_m * o.sigma_depth_m));
+  const float fx = static_cast<float>(k.fx), fy = static_cast<float>(k.fy);
+  const float cx = static_cast<float>(k.cx), cy = static_cast<float>(k.cy);
+  PreprocessedFrame out;
+  out.depth_m.create(h, w, CV_32F);
+  out.vertex.create(h, w, CV_32FC4);
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      const float d0 = depth_m.at<float>(v, u);
+      if (!depthInRange(d0, min_d, max_d)) {
+        out.depth_m.at<float>(v, u) = kNaN;
+        out.vertex.at<cv::Vec4f>(v, u) = cv::Vec4f(kNaN, kNaN, kNaN, 0.0f);
+        continue;
+      }
+      float sum_w = 0.0f, sum_wd = 0.0f;
+      for (int dv = -r; dv <= r; ++dv) {
+        const int vv = v + dv;
+        if (vv < 0 || vv >= h) continue;
+        for (int du = -r; du <= r; ++du) {
+          const int uu = u + du;
+          if (uu < 0 || uu >= w) continue;
+          const float d = depth_m.at<float>(vv, uu);
+          if (!depthInRange(d, min_d, max_d)) continue;
+          const float dd = d - d0;
+          const float wt =
+              std::exp(-static_cast<float>(du * du + dv * dv) * inv_s - dd * dd * inv_d);
+          sum_w += wt;
+          sum_wd += wt * d;
+        }
+      }
+      const float z = sum_wd / sum_w;
+      out.depth_m.at<float>(v, u) = z;
+      out.vertex.at<cv::Vec4f>(v, u) = cv::Vec4f((static_cast<float>(u) - cx) / fx * z,
+                                                 (static_cast<float>(v) - cy) / fy * z, z, 1.0f);
+    }
+  }
+  return out;
+}
+
+Preprocessor::Preprocessor(cl::Context& ctx, const PreprocessOptions& options,
+                           const io::Intrinsics& intrinsics)
+    : ctx_(ctx), options_(options), intrinsics_(intrinsics) {
+  checkIntrinsics(intrinsics_);
+  validatePreprocessOptions(options_);
+  const size_t n = static_cast<size_t>(intrinsics_.width) * intrinsics_.height;
+  kernel_ = ctx_.kernel("preprocess", "preprocess_depth",
+                        "-DPRE_RADIUS=" + std::to_string(options_.bilateral_radius_px));
+  input_ = ctx_.buffer(CL_MEM_READ_ONLY, n * sizeof(float));
+  filtered_ = ctx_.buffer(CL_MEM_READ_WRITE, n * sizeof(float));
+  vertex_ = ctx_.buffer(CL_MEM_READ_WRITE, n * 4 * sizeof(float));
+}
+
+void Preprocessor::process(const cv::Mat& depth_m) {
+  checkDepth(depth_m, intrinsics_);
+  const size_t row_bytes = static_cast<size_t>(intrinsics_.width) * sizeof(float);
+  if (depth_m.isContinuous()) {
+    ctx_.write(input_, depth_m.ptr<float>(0), row_bytes * intrinsics_.height);
+  } else {
+    const cv::Mat copy = depth_m.clone();
+    ctx_.write(input_, copy.ptr<float>(0), row_bytes * intrinsics_.height);
+  }
+  process(input_.get());
+}
+
+void Preprocessor::process(cl_mem depth_m) {
+  const auto& o = options_;
+  const float inv_s = static_cast<float>(1.0 / (2.0 * o.sigma_space_px * o.sigma_space_px));
+  const float inv_d = static_cast<float>(1.0 / (2.0 * o.sigma_depth_m * o.sigma_depth_m));
+  cl::setArgs(kernel_, depth_m, filtered_.get(), vertex_.get(), intrinsics_.width,
+              intrinsics_.height, inv_s, inv_d, static_cast<float>(o.min_depth_m),
+              static_cast<float>(o.max_depth_m), static_cast<float>(intrinsics_.fx),
+              static_cast<float>(intrinsics_.fy), static_cast<float>(intrinsics_.cx),
+              static_cast<float>(intrinsics_.cy));
+  // Eight pixels per work item along x.
+  cl::enqueue(ctx_.queue(), kernel_, static_cast<size_t>((intrinsics_.width + 7) / 8),
+              static_cast<size_t>(intrinsics_.height), 0, 8, 8);
+}
+
+PreprocessedFrame Preprocessor::download() const {
+  PreprocessedFrame out;
+  out.depth_m.create(intrinsics_.height, intrinsics_.width, CV_32F);
+  out.vertex.create(intrinsics_.height, intrinsics_.width, CV_32FC4);
+  const size_t n = static_cast<size_t>(intrinsics_.width) * intrinsics_.height;
+  ctx_.read(filtered_, out.depth_m.ptr<float>(0), n * sizeof(float));
+  ctx_.read(vertex_, out.vertex.ptr<float>(0), n * 4 * sizeof(float));
+  return out;
+}
+
+}  // namespace emf::track

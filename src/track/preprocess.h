@@ -1,0 +1,64 @@
+// Preprocessing of a depth frame (METHOD.md step 1) on the device: range check, bilateral
+// filter, back-projection to a vertex map. Host wrapper of kernels_cl/preprocess.cl and its CPU
+// reference.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include "cl/context.h"
+#include "io/frame.h"
+#include "track/track_options.h"
+
+namespace emf::track {
+
+/// Output of the CPU reference (same content as the device buffers).
+struct PreprocessedFrame {
+  cv::Mat depth_m;  // CV_32F filtered depth, metres, NaN = invalid
+  cv::Mat vertex;   // CV_32FC4 camera-frame points (x, y, z, 1) in metres; (NaN x3, 0) invalid
+};
+
+/// CPU reference of the preprocess_depth kernel. `depth_m`: CV_32F metres, NaN or 0 = invalid.
+PreprocessedFrame preprocessReference(const cv::Mat& depth_m, const io::Intrinsics& intrinsics,
+                                      const PreprocessOptions& options);
+
+/// Checks the options once (ranges are checked by the config loader; this checks relations).
+/// Throws ConfigError naming the keys.
+void validatePreprocessOptions(const PreprocessOptions& options);
+
+/// Device preprocessing for one image size. Buffers are allocated once at construction; run()
+/// only enqueues work (nothing is allocated per frame).
+class Preprocessor {
+ public:
+  /// Throws InvalidArgument when the intrinsics are invalid, ConfigError for bad options.
+  Preprocessor(cl::Context& ctx, const PreprocessOptions& options,
+               const io::Intrinsics& intrinsics);
+
+  /// Copies `depth_m` (CV_32F metres, intrinsics' size) into the input buffer and runs the
+  /// kernel. Throws InvalidArgument naming the expected size/type on mismatch.
+  void process(const cv::Mat& depth_m);
+  /// Runs the kernel on a device buffer of width * height floats (metres) already filled.
+  void process(cl_mem depth_m);
+
+  /// float4 per pixel (camera frame, metres; w = 0 invalid), width * height, row-major.
+  const cl::MemHandle& vertexMap() const { return vertex_; }
+  /// float per pixel, filtered depth in metres (NaN invalid).
+  const cl::MemHandle& filteredDepth() const { return filtered_; }
+  /// The input buffer used by process(const cv::Mat&).
+  const cl::MemHandle& inputDepth() const { return input_; }
+
+  /// Blocking read-back of the results (tests, debugging, exporters).
+  PreprocessedFrame download() const;
+
+  const io::Intrinsics& intrinsics() const { return intrinsics_; }
+
+ private:
+  cl::Context& ctx_;
+  PreprocessOptions options_;
+  io::Intrinsics intrinsics_;
+  cl::KernelHandle kernel_;
+  cl::MemHandle input_;
+  cl::MemHandle filtered_;
+  cl::MemHandle vertex_;
+};
+
+}  // namespace emf::track

@@ -1,0 +1,379 @@
+#include "track/tracker.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <sstream>
+
+#include "common/error.h"
+
+namespace emf::track {
+namespace {
+
+// Must match kernels_cl/track_reduce.cl.
+constexpr int kTerms = 34;
+constexpr int kLocalSize = 64;
+// Each work item handles about this many pixels before the work-group reduction; the group
+// count is capped so the partials stay small (host sum or second kernel).
+constexpr int kPixelsPerItem = 16;
+constexpr int kMaxGroups = 1024;
+constexpr double kPi = 3.14159265358979323846;
+
+enum Term : int {
+  kH = 0,
+  kG = 21,
+  kCost = 27,
+  kValid = 28,
+  kInliers = 29,
+  kInput = 30,
+  kMaxWeight = 31,
+  kCostChange = 32,
+  kCommon = 33,
+};
+
+void unpackTerms(const double* t, NormalEquations* ne) {
+  int k = 0;
+  for (int a = 0; a < 6; ++a) {
+    for (int b = a; b < 6; ++b) {
+      ne->H(a, b) = t[k];
+      ne->H(b, a) = t[k];
+      ++k;
+    }
+  }
+  for (int a = 0; a < 6; ++a) ne->g(a) = t[kG + a];
+  ne->cost = t[kCost];
+  ne->valid = static_cast<int>(std::lround(t[kValid]));
+  ne->inliers = static_cast<int>(std::lround(t[kInliers]));
+  ne->input = static_cast<int>(std::lround(t[kInput]));
+  ne->max_weight = t[kMaxWeight];
+  ne->cost_change = t[kCostChange];
+  ne->common = static_cast<int>(std::lround(t[kCommon]));
+}
+
+void checkVolume(const map::VolumeDeviceView& v) {
+  if (!v.index || !v.voxels || (v.dims_blocks.array() <= 0).any() || !(v.voxel_size_m > 0.f) ||
+      !(v.truncation_m > 0.f)) {
+    std::ostringstream s;
+    s << "tracking: invalid volume view (index " << v.index << ", voxels " << v.voxels << ", dims "
+      << v.dims_blocks.transpose() << " blocks, voxel " << v.voxel_size_m << " m, truncation "
+      << v.truncation_m << " m): pass a volume created by the map with buffers, dims and sizes set";
+    throw InvalidArgument(s.str());
+  }
+}
+
+}  // namespace
+
+const char* trackLossName(TrackLoss loss) {
+  switch (loss) {
+    case TrackLoss::kNone:
+      return "none";
+    case TrackLoss::kNoDepth:
+      return "no_depth";
+    case TrackLoss::kFewValidPoints:
+      return "few_valid_points";
+    case TrackLoss::kLargeMotion:
+      return "large_motion";
+    case TrackLoss::kFewInliers:
+      return "few_inliers";
+    case TrackLoss::kDegenerate:
+      return "degenerate";
+  }
+  return "unknown";
+}
+
+NormalEquations accumulateReference(const map::VolumeHostView& volume, const cv::Mat& vertex,
+                                    const cv::Mat& q, int stride,
+                                    const Eigen::Isometry3d& T_volume_camera, double huber_delta_m,
+                                    const cv::Mat* prev_cost, cv::Mat* pixel_cost) {
+  if (vertex.type() != CV_32FC4 || (!q.empty() && (q.type() != CV_32F || q.size != vertex.size))) {
+    throw InvalidArgument(
+        "accumulateReference: vertex must be CV_32FC4 and q empty or CV_32F of the same size");
+  }
+  if (stride < 1) throw InvalidArgument("accumulateReference: stride must be >= 1");
+  if (pixel_cost && (pixel_cost->type() != CV_32F || pixel_cost->size != vertex.size)) {
+    pixel_cost->create(vertex.rows, vertex.cols, CV_32F);
+    pixel_cost->setTo(std::numeric_limits<float>::quiet_NaN());
+  }
+  double t[kTerms] = {};
+  const Eigen::Matrix4f M = T_volume_camera.matrix().cast<float>();
+  const double delta = static_cast<float>(huber_delta_m);
+  for (int v = 0; v < vertex.rows; v += stride) {
+    for (int u = 0; u < vertex.cols; u += stride) {
+      const cv::Vec4f p = vertex.at<cv::Vec4f>(v, u);
+      const float qu = q.empty() ? 1.0f : q.at<float>(v, u);
+      if (pixel_cost) pixel_cost->at<float>(v, u) = std::numeric_limits<float>::quiet_NaN();
+      if (!(p[3] > 0.0f) || !(qu > 0.0f)) continue;
+      t[kInput] += 1.0;
+      // Same float transform as the kernel, so both sample the SDF at the same point.
+      const Eigen::Vector3f xf =
+          M.topLeftCorner<3, 3>() * Eigen::Vector3f(p[0], p[1], p[2]) + M.topRightCorner<3, 1>();
+      float psi, weight;
+      Eigen::Vector3f grad;
+      if (!map::sampleSdfReference(volume, xf, &psi, &weight, &grad)) continue;
+      t[kValid] += 1.0;
+      const double r = psi, abs_r = std::abs(r);
+      const bool inlier = abs_r <= delta;
+      const double c = static_cast<double>(qu) * weight;
+      t[kInliers] += inlier ? 1.0 : 0.0;
+      const double cost = c * (inlier ? 0.5 * r * r : delta * (abs_r - 0.5 * delta));
+      t[kCost] += cost;
+      if (pixel_cost) pixel_cost->at<float>(v, u) = static_cast<float>(cost);
+      if (prev_cost && !std::isnan(prev_cost->at<float>(v, u))) {
+        t[kCostChange] += cost - prev_cost->at<float>(v, u);
+        t[kCommon] += 1.0;
+      }
+      const double wt = c * (inlier ? 1.0 : delta / abs_r);
+      const Eigen::Vector3d gd = grad.cast<double>();
+      const Eigen::Vector3d jr = xf.cast<double>().cross(gd);
+      const double j[6] = {gd.x(), gd.y(), gd.z(), jr.x(), jr.y(), jr.z()};
+      int k = 0;
+      for (int a = 0; a < 6; ++a) {
+        for (int b = a; b < 6; ++b) t[k++] += wt * j[a] * j[b];
+        t[kG + a] += wt * j[a] * r;
+      }
+      t[kMaxWeight] = std::max(t[kMaxWeight], static_cast<double>(weight));
+    }
+  }
+  NormalEquations ne;
+  unpackTerms(t, &ne);
+  return ne;
+}
+
+double balancedInverseCondition(const Matrix6d& H) {
+  const double tt = H.topLeftCorner<3, 3>().trace();
+  const double rr = H.bottomRightCorner<3, 3>().trace();
+  if (!(tt > 0.0) || !(rr > 0.0) || !H.allFinite()) return 0.0;
+  Vector6d s;
+  s << 1.0, 1.0, 1.0, Eigen::Vector3d::Constant(std::sqrt(tt / rr));
+  const Matrix6d Hs = s.asDiagonal() * H * s.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> es(Hs, Eigen::EigenvaluesOnly);
+  const double lmax = es.eigenvalues().maxCoeff();
+  if (!(lmax > 0.0)) return 0.0;
+  return std::max(0.0, es.eigenvalues().minCoeff()) / lmax;
+}
+
+Tracker::Tracker(cl::Context& ctx, const TrackOptions& options, int width, int height)
+    : ctx_(ctx), options_(options), width_(width), height_(height) {
+  if (width <= 0 || height <= 0) {
+    std::ostringstream s;
+    s << "tracking: image size " << width << "x" << height << " is invalid";
+    throw InvalidArgument(s.str());
+  }
+  if (options_.final_reduction != "host" && options_.final_reduction != "device") {
+    throw ConfigError("track.final_reduction must be host or device, got '" +
+                      options_.final_reduction + "'");
+  }
+  const std::string defs = "-DTRACK_LOCAL=" + std::to_string(kLocalSize);
+  accumulate_ = ctx_.kernel("track_reduce", "track_accumulate", defs);
+  reduce_ = ctx_.kernel("track_reduce", "track_reduce_partials", defs);
+  partials_ = ctx_.buffer(CL_MEM_READ_WRITE, sizeof(float) * kTerms * kMaxGroups);
+  reduced_ = ctx_.buffer(CL_MEM_READ_WRITE, sizeof(float) * kTerms);
+  const std::vector<float> ones(static_cast<size_t>(width) * height, 1.0f);
+  ones_ = ctx_.buffer(CL_MEM_READ_ONLY, ones.size() * sizeof(float), ones.data());
+  for (auto& c : costs_) {
+    c = ctx_.buffer(CL_MEM_READ_WRITE, ones.size() * sizeof(float));
+  }
+  host_partials_.resize(static_cast<size_t>(kTerms) * kMaxGroups);
+}
+
+int Tracker::localSize() { return kLocalSize; }
+
+int Tracker::numGroups(int stride) const {
+  const long sw = (width_ + stride - 1) / stride;
+  const long sh = (height_ + stride - 1) / stride;
+  const long per_group = static_cast<long>(kLocalSize) * kPixelsPerItem;  // multiple of 8
+  return static_cast<int>(
+      std::clamp((sw * sh + per_group - 1) / per_group, 1L, static_cast<long>(kMaxGroups)));
+}
+
+NormalEquations Tracker::evaluate(const map::VolumeDeviceView& volume, cl_mem vertex_map, cl_mem q,
+                                  const Eigen::Isometry3d& T_volume_camera, int stride,
+                                  bool compare_with_last) {
+  const NormalEquations ne =
+      evaluateCandidate(volume, vertex_map, q, T_volume_camera, stride, compare_with_last);
+  current_ = 1 - current_;
+  return ne;
+}
+
+cv::Mat Tracker::lastPixelCosts() const {
+  cv::Mat out(height_, width_, CV_32F);
+  ctx_.read(costs_[current_], out.ptr<float>(0), out.total() * sizeof(float));
+  return out;
+}
+
+NormalEquations Tracker::evaluateCandidate(const map::VolumeDeviceView& volume, cl_mem vertex_map,
+                                           cl_mem q, const Eigen::Isometry3d& T_volume_camera,
+                                           int stride, bool compare) {
+  checkVolume(volume);
+  if (!vertex_map) throw InvalidArgument("tracking: vertex map buffer is null");
+  if (stride < 1) throw InvalidArgument("tracking: pixel stride must be >= 1");
+  const int groups = numGroups(stride);
+  const Eigen::Matrix4f M = T_volume_camera.matrix().cast<float>();
+  cl_float4 rows[3];
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 4; ++c) rows[r].s[c] = M(r, c);
+  }
+  cl_int4 dims;
+  dims.s[0] = volume.dims_blocks.x();
+  dims.s[1] = volume.dims_blocks.y();
+  dims.s[2] = volume.dims_blocks.z();
+  dims.s[3] = 0;
+  const float delta = static_cast<float>(options_.huber_truncation_factor * volume.truncation_m);
+  cl::setArgs(accumulate_, vertex_map, q ? q : ones_.get(), width_, height_, stride, rows[0],
+              rows[1], rows[2], volume.index, dims, volume.voxels, volume.voxel_size_m,
+              volume.truncation_m, delta, costs_[current_].get(), costs_[1 - current_].get(),
+              compare ? 1 : 0, partials_.get());
+  cl::enqueue(ctx_.queue(), accumulate_, static_cast<size_t>(groups) * kLocalSize, 0, 0,
+              kLocalSize);
+  double t[kTerms] = {};
+  if (options_.final_reduction == "device") {
+    cl::setArgs(reduce_, partials_.get(), groups, reduced_.get());
+    cl::enqueue(ctx_.queue(), reduce_, kTerms);
+    float out[kTerms];
+    ctx_.read(reduced_, out, sizeof(out));
+    for (int k = 0; k < kTerms; ++k) t[k] = out[k];
+  } else {
+    ctx_.read(partials_, host_partials_.data(), sizeof(float) * kTerms * groups);
+    for (int gi = 0; gi < groups; ++gi) {
+      const float* row = host_partials_.data() + static_cast<size_t>(gi) * kTerms;
+      for (int k = 0; k < kTerms; ++k) {
+        t[k] = k == kMaxWeight ? std::max(t[k], static_cast<double>(row[k])) : t[k] + row[k];
+      }
+    }
+  }
+  NormalEquations ne;
+  unpackTerms(t, &ne);
+  return ne;
+}
+
+Tracker::LevelResult Tracker::runLevel(const map::VolumeDeviceView& volume, cl_mem vertex_map,
+                                       cl_mem q, int stride, int max_iterations, double tau,
+                                       double inv_max_weight, Eigen::Isometry3d* T,
+                                       NormalEquations* at_T) {
+  // Levenberg-Marquardt (Madsen, Nielsen & Tingleff, "Methods for non-linear least squares
+  // problems", 2004, alg. 3.16) on left increments; all terms scaled by 1 / max W. The actual
+  // cost reduction of a step is measured over the pixels valid at both poses.
+  LevelResult res;
+  const double eps = options_.lm_eps;
+  Matrix6d H = at_T->H * inv_max_weight;
+  Vector6d g = at_T->g * inv_max_weight;
+  double mu = tau * H.diagonal().maxCoeff();
+  double nu = options_.lm_nu;
+  res.final_damping = tau;
+  if (!(mu > 0.0) || !std::isfinite(mu)) return res;  // no gradient information at all
+  while (res.iterations < max_iterations) {
+    if (g.cwiseAbs().maxCoeff() <= eps) {
+      res.converged = true;
+      break;
+    }
+    const Vector6d h = (H + mu * Matrix6d::Identity()).ldlt().solve(-g);
+    if (!h.allFinite()) break;
+    if (h.norm() <= eps) {
+      res.converged = true;
+      break;
+    }
+    const Eigen::Isometry3d T_new = applyLeftIncrement(h, *T);
+    const NormalEquations ne = evaluateCandidate(volume, vertex_map, q, T_new, stride, true);
+    ++res.iterations;
+    const double actual = -ne.cost_change * inv_max_weight;
+    const double predicted = 0.5 * h.dot(mu * h - g);
+    const double gain = actual / predicted;
+    const double max_diag = H.diagonal().maxCoeff();
+    if (ne.valid > 0 && predicted > 0.0 && gain > 0.0) {
+      *T = T_new;
+      *at_T = ne;
+      current_ = 1 - current_;
+      H = ne.H * inv_max_weight;
+      g = ne.g * inv_max_weight;
+      const double c = 2.0 * gain - 1.0;
+      mu *= std::max(1.0 / 3.0, 1.0 - c * c * c);
+      nu = options_.lm_nu;
+    } else {
+      mu *= nu;
+      nu *= 2.0;
+      if (!std::isfinite(mu)) break;
+    }
+    // Early exit: the step is negligible and LM is close to Gauss-Newton (damping below the
+    // largest curvature), so the small step is not just an artefact of heavy damping.
+    if (options_.early_exit_step > 0.0 && h.norm() < options_.early_exit_step && mu <= max_diag) {
+      res.converged = true;
+      break;
+    }
+  }
+  const double max_diag = H.diagonal().maxCoeff();
+  if (max_diag > 0.0) res.final_damping = mu / max_diag;
+  return res;
+}
+
+TrackResult Tracker::track(const map::VolumeDeviceView& volume, cl_mem vertex_map, cl_mem q,
+                           const Eigen::Isometry3d& T_volume_camera_init) {
+  TrackResult result;
+  result.T_volume_camera = T_volume_camera_init;
+  Eigen::Isometry3d T = T_volume_camera_init;
+  const int levels = options_.coarse_levels;
+  NormalEquations ne = evaluate(volume, vertex_map, q, T, options_.pixel_stride << levels);
+  double inv_max_weight = 0.0;
+  if (ne.max_weight > 0.0) inv_max_weight = 1.0 / ne.max_weight;
+  bool finest_converged = false;
+  double tau = options_.lm_tau;
+  for (int level = levels; level >= 0 && inv_max_weight > 0.0; --level) {
+    const int stride = options_.pixel_stride << level;
+    if (level != levels) ne = evaluate(volume, vertex_map, q, T, stride);
+    const int cap = level == 0 ? options_.max_iterations : options_.coarse_max_iterations;
+    const LevelResult lr =
+        runLevel(volume, vertex_map, q, stride, cap, tau, inv_max_weight, &T, &ne);
+    result.iterations += lr.iterations;
+    finest_converged = lr.converged;
+    // Later levels continue with the damping reached so far (relative to the curvature)
+    // instead of ramping down from lm_tau again.
+    tau = std::min(options_.lm_tau, lr.final_damping);
+  }
+  result.converged = finest_converged;
+  result.T_volume_camera = T;
+  result.cost = ne.cost * inv_max_weight;
+  result.valid_pixels = ne.valid;
+  result.input_pixels = ne.input;
+  result.cost_per_valid = ne.valid > 0 ? result.cost / ne.valid : 0.0;
+  result.valid_fraction = ne.input > 0 ? static_cast<double>(ne.valid) / ne.input : 0.0;
+  result.inlier_ratio = ne.valid > 0 ? static_cast<double>(ne.inliers) / ne.valid : 0.0;
+  result.inverse_condition = balancedInverseCondition(ne.H);
+  const Eigen::Isometry3d motion = T_volume_camera_init.inverse() * T;
+  result.motion_m = motion.translation().norm();
+  result.motion_deg = rotationAngle(motion) * 180.0 / kPi;
+
+  std::ostringstream why;
+  if (ne.input == 0) {
+    result.loss = TrackLoss::kNoDepth;
+    why << "no pixel has valid depth (and q > 0)";
+  } else if (result.valid_fraction < options_.min_valid_fraction) {
+    result.loss = TrackLoss::kFewValidPoints;
+    why << "only " << ne.valid << " of " << ne.input << " points (" << result.valid_fraction
+        << ") land on the observed map, below track.min_valid_fraction "
+        << options_.min_valid_fraction;
+  } else if (result.motion_m > options_.max_motion_m ||
+             result.motion_deg > options_.max_motion_deg) {
+    result.loss = TrackLoss::kLargeMotion;
+    why << "the pose moved " << result.motion_m << " m / " << result.motion_deg
+        << " deg from its initial value, beyond track.max_motion_m " << options_.max_motion_m
+        << " / track.max_motion_deg " << options_.max_motion_deg;
+  } else if (result.inlier_ratio < options_.min_inlier_ratio) {
+    result.loss = TrackLoss::kFewInliers;
+    why << "inlier ratio " << result.inlier_ratio << " (" << ne.inliers << " of " << ne.valid
+        << " points within the Huber delta) is below track.min_inlier_ratio "
+        << options_.min_inlier_ratio;
+  } else if (result.inverse_condition < options_.min_inverse_condition) {
+    result.loss = TrackLoss::kDegenerate;
+    why << "degenerate geometry: inverse condition number " << result.inverse_condition
+        << " of the balanced Hessian is below track.min_inverse_condition "
+        << options_.min_inverse_condition;
+  }
+  result.lost = result.loss != TrackLoss::kNone;
+  result.loss_reason = why.str();
+  return result;
+}
+
+}  // namespace emf::track

@@ -1,0 +1,163 @@
+// Direct SDF-alignment tracking of the camera against one volume (METHOD.md step 3).
+//
+// Minimises E(T) = sum_u q_u * c_u * rho(psi(T p_u)) over T = T_volume_camera, where p_u is the
+// camera-frame vertex map, psi the volume's trilinear SDF (metres), c_u = W(T p_u) / max W the
+// map confidence (max W over the frame's samples at the initial pose, fixed for the call), q_u
+// the per-pixel association weight and rho the Huber cost with delta = huber_truncation_factor
+// x truncation (rho(r) = r^2/2 for |r| <= delta, delta (|r| - delta/2) beyond; its IRLS form is
+// 1/2 w_u r^2 with w_u = min(1, delta/|r|)). Levenberg-Marquardt on left-multiplied se(3)
+// increments (translation first, see se3.h); the accumulation of H, g and E runs on the device
+// (kernels_cl/track_reduce.cl), the 6x6 damped solve on the host (Eigen LDLT).
+//
+// LM details: mu0 = lm_tau * max diag(H); a step h solves (H + mu I) h = -g and is accepted
+// when the actual cost reduction, measured over the pixels valid at both poses, is positive
+// (gain ratio rho > 0: mu *= max(1/3, 1 - (2 rho - 1)^3)); otherwise mu *= nu, nu doubles.
+// Stops when |g|_inf or |h| <= lm_eps, after max_iterations, or (early_exit_step > 0) once
+// |h| < early_exit_step while mu <= max diag(H). Optional coarse levels run first on every
+// 2^l-th pixel (pixel_stride x 2^l), each continuing with the damping the previous one reached.
+//
+// Tracking loss (TrackResult::lost), checked in this order at the final pose of the finest level:
+//   no pixel with valid depth                          -> kNoDepth
+//   valid / input < min_valid_fraction                 -> kFewValidPoints
+//   |T_init^-1 T| > max_motion_m or max_motion_deg     -> kLargeMotion
+//   inliers / valid < min_inlier_ratio                 -> kFewInliers
+//   balancedInverseCondition(H) < min_inverse_condition -> kDegenerate
+// A lost result still carries the estimate; the caller keeps its last good pose and does not
+// integrate the frame.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "cl/context.h"
+#include "map/volume_view.h"
+#include "map/voxel_layout.h"
+#include "track/se3.h"
+#include "track/track_options.h"
+
+namespace emf::track {
+
+/// The Gauss-Newton terms of E at one pose, unnormalised (confidence c_u = q_u * W, not divided
+/// by max W). H and g use the translation-first increment ordering.
+struct NormalEquations {
+  Matrix6d H = Matrix6d::Zero();  // sum c h J J^T
+  Vector6d g = Vector6d::Zero();  // sum c h J r   (metres)
+  double cost = 0.0;              // sum c rho(r)  (metres^2)
+  int valid = 0;                  // pixels whose point landed on observed map
+  int inliers = 0;                // of those, |r| <= delta
+  int input = 0;                  // pixels with a valid vertex and q > 0
+  double max_weight = 0.0;        // max W over the valid samples
+  /// Compared with an earlier evaluation (per-pixel costs): sum over the pixels valid at both
+  /// poses of (cost now - cost then), and their number. What LM uses to accept a step, so
+  /// that points entering or leaving the observed map do not make E jump.
+  double cost_change = 0.0;
+  int common = 0;
+};
+
+/// CPU reference of the track_accumulate kernel (and its reduction), in double. `vertex`:
+/// CV_32FC4 camera-frame points (w = 0 invalid); `q`: CV_32F weights or empty (= ones). Only
+/// pixels (u, v) with u % stride == 0 and v % stride == 0 are used. `prev_cost` (CV_32F, NaN
+/// where invalid; optional) gives cost_change/common; `pixel_cost` (optional) receives each
+/// used pixel's cost c rho(r) (NaN where not valid; other pixels untouched).
+NormalEquations accumulateReference(const map::VolumeHostView& volume, const cv::Mat& vertex,
+                                    const cv::Mat& q, int stride,
+                                    const Eigen::Isometry3d& T_volume_camera, double huber_delta_m,
+                                    const cv::Mat* prev_cost = nullptr,
+                                    cv::Mat* pixel_cost = nullptr);
+
+/// Why a frame was declared lost (TrackResult::loss).
+enum class TrackLoss {
+  kNone = 0,
+  kNoDepth,         // no pixel with valid depth and q > 0
+  kFewValidPoints,  // too few points landed on the observed map (min_valid_fraction)
+  kLargeMotion,     // the estimate left the initial pose's neighbourhood (max_motion_*)
+  kFewInliers,      // residuals too large for too many points (min_inlier_ratio)
+  kDegenerate,      // the geometry does not constrain all 6 DoF (min_inverse_condition)
+};
+const char* trackLossName(TrackLoss loss);
+
+struct TrackResult {
+  /// Final estimate (also returned when lost: the caller keeps its last good pose).
+  Eigen::Isometry3d T_volume_camera = Eigen::Isometry3d::Identity();
+  int iterations = 0;            // LM iterations over all levels (one device evaluation each)
+  bool converged = false;        // stopped by lm_eps / early_exit_step, not by max_iterations
+  double cost = 0.0;             // final E (metres^2, confidence normalised by max W)
+  double cost_per_valid = 0;     // cost / valid_pixels
+  int valid_pixels = 0;          // finest level: pixels landing on observed map
+  int input_pixels = 0;          // finest level: pixels with valid depth and q > 0
+  double valid_fraction = 0;     // valid_pixels / input_pixels
+  double inlier_ratio = 0;       // inliers / valid_pixels
+  double inverse_condition = 0;  // lambda_min / lambda_max of the balanced Hessian
+  double motion_m = 0;           // |translation| of T_init^-1 T_final (camera frame), metres
+  double motion_deg = 0;         // rotation angle of T_init^-1 T_final, degrees
+  bool lost = false;
+  TrackLoss loss = TrackLoss::kNone;
+  std::string loss_reason;  // human-readable, names the rule and the numbers; empty if ok
+};
+
+/// Tracks poses against volumes for images of one size. Buffers are allocated at
+/// construction; track() allocates nothing on the device. Not thread-safe (one per thread).
+class Tracker {
+ public:
+  /// Throws ConfigError for inconsistent options, InvalidArgument for a bad image size.
+  Tracker(cl::Context& ctx, const TrackOptions& options, int width, int height);
+
+  /// Aligns the vertex map (float4 per pixel, camera frame, w = 0 invalid; width x height as
+  /// constructed) to `volume`, starting from T_volume_camera_init. `q`: float per pixel
+  /// association weights, or nullptr for all ones.
+  TrackResult track(const map::VolumeDeviceView& volume, cl_mem vertex_map, cl_mem q,
+                    const Eigen::Isometry3d& T_volume_camera_init);
+
+  /// One device evaluation of the normal equations at T (unnormalised, like
+  /// accumulateReference). With compare_with_last, cost_change/common compare with the
+  /// per-pixel costs of the previous evaluate() call (same stride). For tests and benchmarks.
+  NormalEquations evaluate(const map::VolumeDeviceView& volume, cl_mem vertex_map, cl_mem q,
+                           const Eigen::Isometry3d& T_volume_camera, int stride,
+                           bool compare_with_last = false);
+  /// Per-pixel costs of the last evaluate() call (CV_32F; NaN where the sample was not valid;
+  /// pixels not sampled at that stride keep stale values). Blocking read; for tests.
+  cv::Mat lastPixelCosts() const;
+
+  const TrackOptions& options() const { return options_; }
+  int width() const { return width_; }
+  int height() const { return height_; }
+  /// Work-group size of the accumulation kernel and the number of groups used at `stride`.
+  static int localSize();
+  int numGroups(int stride) const;
+
+ private:
+  struct LevelResult {
+    int iterations = 0;
+    bool converged = false;
+    double final_damping = 0.0;  // mu / max diag(H) at exit, the next level's tau
+  };
+  // LM on one level; at_T holds the evaluation at *T (its per-pixel costs in costs_[current_]).
+  LevelResult runLevel(const map::VolumeDeviceView& volume, cl_mem vertex_map, cl_mem q, int stride,
+                       int max_iterations, double tau, double inv_max_weight, Eigen::Isometry3d* T,
+                       NormalEquations* at_T);
+  // Evaluates at T writing per-pixel costs to costs_[1 - current_], comparing with
+  // costs_[current_] if `compare`. The caller swaps current_ to accept.
+  NormalEquations evaluateCandidate(const map::VolumeDeviceView& volume, cl_mem vertex_map,
+                                    cl_mem q, const Eigen::Isometry3d& T, int stride, bool compare);
+
+  cl::Context& ctx_;
+  TrackOptions options_;
+  int width_;
+  int height_;
+  cl::KernelHandle accumulate_;
+  cl::KernelHandle reduce_;
+  cl::MemHandle partials_;
+  cl::MemHandle reduced_;
+  cl::MemHandle ones_;
+  cl::MemHandle costs_[2];  // per-pixel costs: accepted (current_) and candidate
+  int current_ = 0;
+  std::vector<float> host_partials_;
+};
+
+/// Inverse condition number of H after balancing: the rotation block is scaled so that its
+/// trace equals the translation block's (removes the metres-vs-radians unit choice).
+double balancedInverseCondition(const Matrix6d& H);
+
+}  // namespace emf::track

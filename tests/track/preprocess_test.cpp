@@ -1,0 +1,201 @@
+// The preprocessing kernel (range check, bilateral filter, back-projection) against its CPU
+// reference on real Kinect depth and on constructed cases, and the reference's own semantics.
+#include "track/preprocess.h"
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "common/error.h"
+#include "test_support.h"
+#include "track_test_support.h"
+
+namespace emf::track {
+namespace {
+
+// Float exp() of the device and the host may differ by a few ulps; the filtered depth is a
+// weighted mean of depths within a 7x7 window, so both agree to well below a micrometre.
+constexpr float kPreprocessToleranceM = 2e-6f;
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+io::Intrinsics kinectIntrinsics() {
+  io::Intrinsics k;
+  k.fx = k.fy = 525.0;
+  k.cx = 319.5;
+  k.cy = 239.5;
+  k.width = 640;
+  k.height = 480;
+  return k;
+}
+
+// Runs the device path and compares every pixel with the reference. Returns the number of
+// valid pixels.
+int compareWithReference(cl::Context& ctx, const cv::Mat& depth, const io::Intrinsics& k,
+                         const PreprocessOptions& o) {
+  Preprocessor pre(ctx, o, k);
+  pre.process(depth);
+  const PreprocessedFrame dev = pre.download();
+  const PreprocessedFrame ref = preprocessReference(depth, k, o);
+  int valid = 0;
+  for (int v = 0; v < k.height; ++v) {
+    for (int u = 0; u < k.width; ++u) {
+      const float r = ref.depth_m.at<float>(v, u), d = dev.depth_m.at<float>(v, u);
+      const cv::Vec4f rv = ref.vertex.at<cv::Vec4f>(v, u), dv = dev.vertex.at<cv::Vec4f>(v, u);
+      if (std::isnan(r)) {
+        EXPECT_TRUE(std::isnan(d)) << "pixel (" << u << "," << v << ") must stay invalid";
+        EXPECT_EQ(dv[3], 0.0f);
+        EXPECT_TRUE(std::isnan(dv[0]) && std::isnan(dv[1]) && std::isnan(dv[2]));
+        if (!std::isnan(d)) return valid;
+        continue;
+      }
+      ++valid;
+      EXPECT_NEAR(d, r, kPreprocessToleranceM) << "pixel (" << u << "," << v << ")";
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(dv[c], rv[c], kPreprocessToleranceM);
+      EXPECT_EQ(dv[3], 1.0f);
+      if (std::abs(d - r) > kPreprocessToleranceM) return valid;  // one report is enough
+    }
+  }
+  return valid;
+}
+
+class Preprocess : public test::WithClQueue {};
+
+TEST_F(Preprocess, RealKinectDepthMatchesReference) {
+  const cv::Mat depth =
+      test::readDepthPng(test::dataPath("tum-fr1-xyz-pairs/case_1/dep_prev.png"), 5000.0);
+  PreprocessOptions o;  // paper defaults: sigma 0.04 m, 4.5 px, 7x7
+  const int valid = compareWithReference(ctx(), depth, kinectIntrinsics(), o);
+  // The frame has holes (zeros) that must stay invalid; most of it is valid.
+  const int raw_valid = cv::countNonZero(depth == depth);
+  EXPECT_EQ(valid, raw_valid);
+  EXPECT_GT(valid, 640 * 480 / 2);
+  EXPECT_LT(valid, 640 * 480);
+}
+
+TEST_F(Preprocess, RealDepthWithRangeLimitsMatchesReference) {
+  const cv::Mat depth =
+      test::readDepthPng(test::dataPath("tum-fr1-xyz-pairs/case_1/dep_prev.png"), 5000.0);
+  PreprocessOptions o;
+  o.min_depth_m = 1.0;
+  o.max_depth_m = 2.0;
+  const int valid = compareWithReference(ctx(), depth, kinectIntrinsics(), o);
+  int in_range = 0;
+  for (auto it = depth.begin<float>(); it != depth.end<float>(); ++it) {
+    in_range += (*it >= 1.0f && *it <= 2.0f) ? 1 : 0;
+  }
+  EXPECT_EQ(valid, in_range);
+}
+
+// Constructed cases: a step edge, holes, image borders, NaN and 0 as invalid, out-of-range.
+cv::Mat constructedDepth(int w, int h) {
+  cv::Mat d(h, w, CV_32F);
+  std::mt19937 rng(11);
+  std::normal_distribution<float> noise(0.0f, 0.003f);
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      float z = u < w / 2 ? 1.0f : 2.5f;  // 1.5 m step edge
+      z += 0.002f * static_cast<float>(v) + noise(rng);
+      d.at<float>(v, u) = z;
+    }
+  }
+  d(cv::Rect(10, 10, 6, 5)).setTo(cv::Scalar(kNaN));  // hole
+  d(cv::Rect(40, 30, 3, 3)).setTo(cv::Scalar(0.0));   // zeros = invalid
+  d.at<float>(0, 0) = kNaN;                           // corner
+  d.at<float>(h - 1, w - 1) = 7.0f;                   // beyond max
+  d.at<float>(h / 2, 5) = 0.05f;                      // below min
+  return d;
+}
+
+TEST_F(Preprocess, ConstructedEdgesAndHolesMatchReference) {
+  const int w = 67, h = 45;  // not multiples of the work-group size
+  io::Intrinsics k;
+  k.fx = 60;
+  k.fy = 58;
+  k.cx = 33.0;
+  k.cy = 21.5;
+  k.width = w;
+  k.height = h;
+  const cv::Mat depth = constructedDepth(w, h);
+  PreprocessOptions o;
+  compareWithReference(ctx(), depth, k, o);
+  o.bilateral_radius_px = 0;  // filter off: back-projection only
+  compareWithReference(ctx(), depth, k, o);
+  o.bilateral_radius_px = 5;
+  o.sigma_space_px = 2.0;
+  o.sigma_depth_m = 0.01;
+  compareWithReference(ctx(), depth, k, o);
+}
+
+TEST(PreprocessReference, SemanticsOnConstructedDepth) {
+  const int w = 67, h = 45;
+  io::Intrinsics k;
+  k.fx = 60;
+  k.fy = 58;
+  k.cx = 33.0;
+  k.cy = 21.5;
+  k.width = w;
+  k.height = h;
+  const cv::Mat depth = constructedDepth(w, h);
+  PreprocessOptions o;
+  const PreprocessedFrame out = preprocessReference(depth, k, o);
+  // Invalid inputs stay invalid.
+  EXPECT_TRUE(std::isnan(out.depth_m.at<float>(12, 12)));
+  EXPECT_TRUE(std::isnan(out.depth_m.at<float>(31, 41)));
+  EXPECT_TRUE(std::isnan(out.depth_m.at<float>(0, 0)));
+  EXPECT_TRUE(std::isnan(out.depth_m.at<float>(h - 1, w - 1)));
+  EXPECT_TRUE(std::isnan(out.depth_m.at<float>(h / 2, 5)));
+  EXPECT_EQ(out.vertex.at<cv::Vec4f>(12, 12)[3], 0.0f);
+  // The step edge survives: the pixel left of the edge stays near 1 m (the 2.5 m side has
+  // weight exp(-1.5^2 / (2 0.04^2)) ~ 0), and the filter reduces the 3 mm noise.
+  const int v = 25, u = w / 2 - 1;
+  EXPECT_NEAR(out.depth_m.at<float>(v, u), 1.0f + 0.002f * v, 0.004f);
+  EXPECT_NEAR(out.depth_m.at<float>(v, u + 1), 2.5f + 0.002f * v, 0.004f);
+  double raw_err = 0, filt_err = 0;
+  int n = 0;
+  for (int vv = 5; vv < h - 5; ++vv) {
+    for (int uu = 20; uu < 28; ++uu) {
+      const float truth = 1.0f + 0.002f * vv;
+      raw_err += std::pow(depth.at<float>(vv, uu) - truth, 2);
+      filt_err += std::pow(out.depth_m.at<float>(vv, uu) - truth, 2);
+      ++n;
+    }
+  }
+  EXPECT_LT(std::sqrt(filt_err / n), 0.5 * std::sqrt(raw_err / n));
+  // Back-projection p = D K^-1 (u, v, 1).
+  const cv::Vec4f p = out.vertex.at<cv::Vec4f>(v, u);
+  const float z = out.depth_m.at<float>(v, u);
+  EXPECT_FLOAT_EQ(p[0], (u - 33.0f) / 60.0f * z);
+  EXPECT_FLOAT_EQ(p[1], (v - 21.5f) / 58.0f * z);
+  EXPECT_FLOAT_EQ(p[2], z);
+  EXPECT_EQ(p[3], 1.0f);
+  // With the filter off the output equals the input where valid.
+  o.bilateral_radius_px = 0;
+  const PreprocessedFrame raw = preprocessReference(depth, k, o);
+  EXPECT_EQ(raw.depth_m.at<float>(v, u), depth.at<float>(v, u));
+}
+
+TEST_F(Preprocess, BadInputIsAClearError) {
+  io::Intrinsics k = kinectIntrinsics();
+  PreprocessOptions o;
+  Preprocessor pre(ctx(), o, k);
+  try {
+    pre.process(cv::Mat(240, 320, CV_32F, cv::Scalar(1.0f)));
+    FAIL() << "expected InvalidArgument";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("640x480"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(pre.process(cv::Mat(480, 640, CV_16U, cv::Scalar(1))), InvalidArgument);
+  o.min_depth_m = 3.0;
+  o.max_depth_m = 2.0;
+  try {
+    Preprocessor bad(ctx(), o, k);
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("preprocess.min_depth_m"), std::string::npos);
+  }
+  k.fx = 0;
+  EXPECT_THROW(Preprocessor(ctx(), PreprocessOptions{}, k), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace emf::track

@@ -1,0 +1,558 @@
+// Direct SDF-alignment tracking: the accumulation kernel against its CPU reference, analytic
+// Jacobians against finite differences, convergence on synthetic frames with known motion and
+// on a real Kinect pair with motion-capture ground truth, and tracking-loss detection.
+#include "track/tracker.h"
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <random>
+
+#include "common/error.h"
+#include "test_support.h"
+#include "track/preprocess.h"
+#include "track_test_support.h"
+
+namespace emf::track {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDeg = kPi / 180.0;
+// Device sums are float (per item, per work-group) and the host adds the group partials in
+// double; the reference is double throughout. Relative to the largest entry of each quantity.
+constexpr double kDeviceVsReferenceRelTolerance = 1e-4;
+// One pixel's cost c rho(r): the device transforms points in float (ulp 2.4e-7 m at 2-4 m), so
+// psi may differ by ~2.5e-7 m; with c = 10 and |rho'| <= delta = 0.04 m that is 1e-7 m^2.
+constexpr double kPixelCostTolerance = 1e-7;
+// A point within a float ulp of an allocated-block boundary may land on either side.
+constexpr int kCountTolerance = 2;
+// Central differences with float SDF sampling (psi error ~1e-8 m, step 1e-4).
+constexpr double kJacobianFdTolerance = 2e-3;
+// Finite differences of the summed cost (float sampling noise, trilinear cell changes).
+constexpr double kGradientFdRelTolerance = 1e-3;
+// Convergence targets of the issue: < 1 mm and < 0.1 degree from 5 cm / 5 degree starts.
+constexpr double kConvergedTranslationM = 1e-3;
+constexpr double kConvergedRotationRad = 0.1 * kDeg;
+
+struct SyntheticWorld {
+  test::AnalyticScene scene;
+  std::unique_ptr<test::HostVolume> host;
+  test::DeviceVolume device;
+  io::Intrinsics intrinsics;
+  Eigen::Isometry3d T_volume_camera_gt;
+  cv::Mat depth;
+};
+
+// 2.56 m cube at 2 cm, truncation 10 voxels, weight 10: the room corner with boxes.
+SyntheticWorld makeWorld(cl::Context& ctx, const test::AnalyticScene& scene,
+                         const Eigen::Isometry3d& T_volume_camera) {
+  SyntheticWorld w;
+  w.scene = scene;
+  w.host = std::make_unique<test::HostVolume>(
+      test::volumeFromSdf([&](const Eigen::Vector3f& x) { return scene.sdf(x); },
+                          Eigen::Vector3i(16, 16, 16), 0.02f, 0.2f, 10.0f));
+  w.device = test::upload(ctx, *w.host);
+  w.intrinsics = test::smallCamera();
+  w.T_volume_camera_gt = T_volume_camera;
+  w.depth = scene.render(w.intrinsics, T_volume_camera);
+  return w;
+}
+
+double translationError(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  return (a.inverse() * b).translation().norm();
+}
+double rotationError(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  return rotationAngle(a.inverse() * b);
+}
+
+// Camera-centred perturbation: the camera moves by `t_m` along a random direction and rotates
+// by `angle_rad` about a random axis through its centre.
+Eigen::Isometry3d perturb(const Eigen::Isometry3d& T, std::mt19937& rng, double t_m,
+                          double angle_rad) {
+  Vector6d d;
+  d.head<3>() = test::randomUnit(rng) * t_m;
+  d.tail<3>() = test::randomUnit(rng) * angle_rad;
+  Eigen::Isometry3d P = Eigen::Isometry3d::Identity();
+  P.linear() = expSo3(d.tail<3>());
+  P.translation() = d.head<3>();
+  return T * P;
+}
+
+class TrackerTest : public test::WithClQueue {
+ protected:
+  static void SetUpTestSuite() {
+    WithClQueue::SetUpTestSuite();
+    if (!room_) {
+      room_ = std::make_unique<SyntheticWorld>(
+          makeWorld(*ctx_, test::roomCornerScene(), test::roomCornerCamera()));
+    }
+  }
+  static std::unique_ptr<SyntheticWorld> room_;
+};
+std::unique_ptr<SyntheticWorld> TrackerTest::room_;
+
+void expectNormalEquationsNear(const NormalEquations& dev, const NormalEquations& ref) {
+  ASSERT_GT(ref.valid, 1000);
+  EXPECT_NEAR(dev.input, ref.input, 0);
+  EXPECT_NEAR(dev.valid, ref.valid, kCountTolerance);
+  EXPECT_NEAR(dev.inliers, ref.inliers, kCountTolerance);
+  EXPECT_NEAR(dev.max_weight, ref.max_weight, 1e-6 * ref.max_weight);
+  const double h_scale = ref.H.cwiseAbs().maxCoeff();
+  const double g_scale = ref.g.cwiseAbs().maxCoeff();
+  for (int a = 0; a < 6; ++a) {
+    for (int b = 0; b < 6; ++b) {
+      EXPECT_NEAR(dev.H(a, b), ref.H(a, b), kDeviceVsReferenceRelTolerance * h_scale)
+          << "H(" << a << "," << b << ")";
+    }
+    EXPECT_NEAR(dev.g(a), ref.g(a), kDeviceVsReferenceRelTolerance * g_scale) << "g(" << a << ")";
+  }
+  EXPECT_NEAR(dev.cost, ref.cost, kDeviceVsReferenceRelTolerance * ref.cost);
+}
+
+TEST_F(TrackerTest, SyntheticDepthCoversTheScene) {
+  // The rendered frame sees all three walls and the boxes (sanity of the test scene itself).
+  const cv::Mat& d = room_->depth;
+  EXPECT_EQ(cv::countNonZero(d != d), 0) << "every ray hits the room";
+  double lo, hi;
+  cv::minMaxLoc(d, &lo, &hi);
+  EXPECT_GT(lo, 0.8);
+  EXPECT_LT(hi, 3.5);
+  // The analytic SDF is zero at rendered surface points.
+  const Eigen::Isometry3d T = room_->T_volume_camera_gt;
+  const io::Intrinsics& k = room_->intrinsics;
+  for (int v = 0; v < k.height; v += 17) {
+    for (int u = 0; u < k.width; u += 13) {
+      const double z = d.at<float>(v, u);
+      const Eigen::Vector3d p((u - k.cx) / k.fx * z, (v - k.cy) / k.fy * z, z);
+      ASSERT_NEAR(room_->scene.sdf((T * p).cast<float>()), 0.0f, 1e-4f) << u << "," << v;
+    }
+  }
+}
+
+TEST_F(TrackerTest, AccumulationMatchesReferenceSynthetic) {
+  const io::Intrinsics& k = room_->intrinsics;
+  PreprocessOptions po;
+  const PreprocessedFrame frame = preprocessReference(room_->depth, k, po);
+  cl::MemHandle vertex =
+      ctx().buffer(CL_MEM_READ_ONLY, frame.vertex.total() * sizeof(cv::Vec4f), frame.vertex.data);
+  // Non-trivial association weights, some zero.
+  cv::Mat q(k.height, k.width, CV_32F);
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<float> uq(0.0f, 1.0f);
+  for (auto it = q.begin<float>(); it != q.end<float>(); ++it) {
+    const float x = uq(rng);
+    *it = x < 0.1f ? 0.0f : x;
+  }
+  cl::MemHandle qbuf = ctx().buffer(CL_MEM_READ_ONLY, q.total() * sizeof(float), q.data);
+  // A pose 3 cm / 3 degrees off: inliers and Huber outliers.
+  const Eigen::Isometry3d T = perturb(room_->T_volume_camera_gt, rng, 0.03, 3 * kDeg);
+  const double delta = 0.2 * room_->host->truncation_m;
+  for (const std::string reduction : {"host", "device"}) {
+    TrackOptions o;
+    o.final_reduction = reduction;
+    Tracker tracker(ctx(), o, k.width, k.height);
+    for (int stride : {1, 3}) {
+      SCOPED_TRACE(reduction + " reduction, stride " + std::to_string(stride));
+      const NormalEquations ref =
+          accumulateReference(room_->host->view(), frame.vertex, q, stride, T, delta);
+      EXPECT_GT(ref.inliers, ref.valid / 4);
+      EXPECT_LT(ref.inliers, ref.valid);
+      const NormalEquations dev =
+          tracker.evaluate(room_->device.view, vertex.get(), qbuf.get(), T, stride);
+      expectNormalEquationsNear(dev, ref);
+    }
+    // q = nullptr means all ones.
+    const NormalEquations ref1 =
+        accumulateReference(room_->host->view(), frame.vertex, cv::Mat(), 2, T, delta);
+    expectNormalEquationsNear(tracker.evaluate(room_->device.view, vertex.get(), nullptr, T, 2),
+                              ref1);
+  }
+}
+
+TEST_F(TrackerTest, CostChangeOverCommonPixelsMatchesReference) {
+  // The step-acceptance terms: per-pixel costs of one evaluation compared with the next.
+  const io::Intrinsics& k = room_->intrinsics;
+  const PreprocessedFrame frame = preprocessReference(room_->depth, k, PreprocessOptions{});
+  cl::MemHandle vertex =
+      ctx().buffer(CL_MEM_READ_ONLY, frame.vertex.total() * sizeof(cv::Vec4f), frame.vertex.data);
+  std::mt19937 rng(22);
+  const Eigen::Isometry3d T1 = perturb(room_->T_volume_camera_gt, rng, 0.03, 3 * kDeg);
+  const Eigen::Isometry3d T2 = perturb(T1, rng, 0.01, 1 * kDeg);
+  const double delta = 0.2 * room_->host->truncation_m;
+  Tracker tracker(ctx(), TrackOptions{}, k.width, k.height);
+  for (int stride : {1, 2}) {
+    SCOPED_TRACE("stride " + std::to_string(stride));
+    cv::Mat cost1, cost2;
+    accumulateReference(room_->host->view(), frame.vertex, cv::Mat(), stride, T1, delta, nullptr,
+                        &cost1);
+    const NormalEquations ref = accumulateReference(room_->host->view(), frame.vertex, cv::Mat(),
+                                                    stride, T2, delta, &cost1, &cost2);
+    tracker.evaluate(room_->device.view, vertex.get(), nullptr, T1, stride);
+    const NormalEquations dev =
+        tracker.evaluate(room_->device.view, vertex.get(), nullptr, T2, stride, true);
+    const cv::Mat dev_cost2 = tracker.lastPixelCosts();
+    int compared = 0;
+    for (int v = 0; v < k.height; v += stride) {
+      for (int u = 0; u < k.width; u += stride) {
+        const float r = cost2.at<float>(v, u), d = dev_cost2.at<float>(v, u);
+        ASSERT_EQ(std::isnan(r), std::isnan(d)) << u << "," << v;
+        if (std::isnan(r)) continue;
+        ASSERT_NEAR(d, r, kDeviceVsReferenceRelTolerance * std::abs(r) + kPixelCostTolerance)
+            << u << "," << v;
+        ++compared;
+      }
+    }
+    EXPECT_GT(compared, 1000);
+    EXPECT_GT(ref.common, ref.valid * 9 / 10);
+    EXPECT_NEAR(dev.common, ref.common, kCountTolerance);
+    // The change is a small difference of large sums: relative to the cost itself.
+    EXPECT_NEAR(dev.cost_change, ref.cost_change, kDeviceVsReferenceRelTolerance * ref.cost);
+    EXPECT_GT(std::abs(ref.cost_change), 100 * kDeviceVsReferenceRelTolerance * ref.cost);
+  }
+}
+
+TEST_F(TrackerTest, PointJacobianMatchesFiniteDifferences) {
+  // J = d psi(exp(delta) x) / d delta = (grad, x cross grad), the terms the kernel accumulates.
+  const map::VolumeHostView vol = room_->host->view();
+  const io::Intrinsics& k = room_->intrinsics;
+  std::mt19937 rng(31);
+  const Eigen::Isometry3d T = perturb(room_->T_volume_camera_gt, rng, 0.01, 1 * kDeg);
+  const double h = 1e-4;
+  int checked = 0;
+  auto cell = [&](const Eigen::Vector3d& x) {
+    return (x / vol.voxel_size_m - Eigen::Vector3d::Constant(0.5)).array().floor().eval();
+  };
+  for (int v = 3; v < k.height; v += 23) {
+    for (int u = 5; u < k.width; u += 19) {
+      const double z = room_->depth.at<float>(v, u);
+      const Eigen::Vector3d x =
+          T * Eigen::Vector3d((u - k.cx) / k.fx * z, (v - k.cy) / k.fy * z, z);
+      float psi, w;
+      Eigen::Vector3f gf;
+      if (!map::sampleSdfReference(vol, x.cast<float>(), &psi, &w, &gf)) continue;
+      const Eigen::Vector3d grad = gf.cast<double>();
+      Vector6d J;
+      J << grad, x.cross(grad);
+      bool same_cell = true;
+      Vector6d fd;
+      for (int c = 0; c < 6 && same_cell; ++c) {
+        Vector6d d = Vector6d::Zero();
+        d(c) = h;
+        const Eigen::Vector3d xp = expSe3(d) * x, xm = expSe3(-d) * x;
+        same_cell = (cell(xp) == cell(x)).all() && (cell(xm) == cell(x)).all();
+        float pp, pm;
+        Eigen::Vector3f dummy;
+        if (!map::sampleSdfReference(vol, xp.cast<float>(), &pp, &w, &dummy) ||
+            !map::sampleSdfReference(vol, xm.cast<float>(), &pm, &w, &dummy)) {
+          same_cell = false;
+          break;
+        }
+        fd(c) = (static_cast<double>(pp) - pm) / (2 * h);
+      }
+      if (!same_cell) continue;  // trilinear gradients jump between cells
+      ++checked;
+      for (int c = 0; c < 6; ++c) {
+        ASSERT_NEAR(J(c), fd(c), kJacobianFdTolerance)
+            << "pixel (" << u << "," << v << ") col " << c << " J " << J.transpose();
+      }
+    }
+  }
+  EXPECT_GT(checked, 100);
+}
+
+TEST_F(TrackerTest, GradientOfReferenceCostMatchesFiniteDifferences) {
+  // With uniform map weights the confidence is constant, so g = dE/d(delta) exactly (Huber is
+  // C1). Checks the sign conventions of g, the Huber weights and the left increment.
+  const io::Intrinsics& k = room_->intrinsics;
+  const PreprocessedFrame frame = preprocessReference(room_->depth, k, PreprocessOptions{});
+  std::mt19937 rng(41);
+  const Eigen::Isometry3d T = perturb(room_->T_volume_camera_gt, rng, 0.03, 2 * kDeg);
+  const double delta = 0.2 * room_->host->truncation_m;
+  // Only points well inside the allocated band and the volume, so that no point enters or
+  // leaves the observed map within the finite-difference steps (E would jump there).
+  cv::Mat q(k.height, k.width, CV_32F, cv::Scalar(0.0f));
+  const float extent = room_->host->extentM().x();
+  for (int v = 0; v < k.height; ++v) {
+    for (int u = 0; u < k.width; ++u) {
+      const cv::Vec4f p = frame.vertex.at<cv::Vec4f>(v, u);
+      const Eigen::Vector3f x = (T * Eigen::Vector3d(p[0], p[1], p[2])).cast<float>();
+      const bool inside = (x.array() > 0.1f).all() && (x.array() < extent - 0.1f).all();
+      if (inside && std::abs(room_->scene.sdf(x)) < 0.1f) q.at<float>(v, u) = 1.0f;
+    }
+  }
+  const NormalEquations ne = accumulateReference(room_->host->view(), frame.vertex, q, 1, T, delta);
+  ASSERT_GT(ne.valid, 20000);
+  ASSERT_GT(ne.valid - ne.inliers, 100) << "the pose must produce Huber outliers too";
+  const double h = 1e-4;
+  const double g_scale = ne.g.cwiseAbs().maxCoeff();
+  for (int c = 0; c < 6; ++c) {
+    Vector6d d = Vector6d::Zero();
+    d(c) = h;
+    const NormalEquations np = accumulateReference(room_->host->view(), frame.vertex, q, 1,
+                                                   applyLeftIncrement(d, T), delta);
+    const NormalEquations nm = accumulateReference(room_->host->view(), frame.vertex, q, 1,
+                                                   applyLeftIncrement(-d, T), delta);
+    ASSERT_EQ(np.valid, ne.valid);
+    ASSERT_EQ(nm.valid, ne.valid);
+    const double ep = np.cost, em = nm.cost;
+    EXPECT_NEAR((ep - em) / (2 * h), ne.g(c), kGradientFdRelTolerance * g_scale)
+        << "component " << c;
+  }
+}
+
+// Tracks the room frame from several 5 cm / 5 degree camera-centred perturbations.
+void expectConvergence(cl::Context& ctx, const SyntheticWorld& world, const TrackOptions& o,
+                       int trials, unsigned seed) {
+  Preprocessor pre(ctx, PreprocessOptions{}, world.intrinsics);
+  pre.process(world.depth);
+  Tracker tracker(ctx, o, world.intrinsics.width, world.intrinsics.height);
+  std::mt19937 rng(seed);
+  for (int i = 0; i < trials; ++i) {
+    const Eigen::Isometry3d init = perturb(world.T_volume_camera_gt, rng, 0.05, 5 * kDeg);
+    ASSERT_NEAR(translationError(world.T_volume_camera_gt, init), 0.05, 1e-9);
+    ASSERT_NEAR(rotationError(world.T_volume_camera_gt, init), 5 * kDeg, 1e-9);
+    const TrackResult r = tracker.track(world.device.view, pre.vertexMap().get(), nullptr, init);
+    SCOPED_TRACE("trial " + std::to_string(i) + ": " + std::to_string(r.iterations) +
+                 " iterations, " + r.loss_reason);
+    EXPECT_LT(translationError(world.T_volume_camera_gt, r.T_volume_camera),
+              kConvergedTranslationM);
+    EXPECT_LT(rotationError(world.T_volume_camera_gt, r.T_volume_camera), kConvergedRotationRad);
+    EXPECT_FALSE(r.lost);
+    EXPECT_GT(r.inlier_ratio, 0.95);
+    EXPECT_GT(r.valid_fraction, 0.9);
+    EXPECT_LE(r.iterations, o.max_iterations + o.coarse_levels * o.coarse_max_iterations);
+  }
+}
+
+TEST_F(TrackerTest, ConvergesFromFiveCmFiveDegreesPaperSettings) {
+  TrackOptions paper;  // METHOD.md: all pixels, LM until |h| <= 1e-8 or 100 iterations
+  paper.coarse_levels = 0;
+  paper.early_exit_step = 0.0;
+  expectConvergence(ctx(), *room_, paper, 6, 51);
+}
+
+TEST_F(TrackerTest, ConvergesWithDefaultCoarseToFineAndEarlyExit) {
+  TrackOptions o;  // defaults: 2 coarse levels, early exit
+  ASSERT_GT(o.coarse_levels, 0);
+  ASSERT_GT(o.early_exit_step, 0.0);
+  o.final_reduction = "device";
+  expectConvergence(ctx(), *room_, o, 6, 52);
+}
+
+TEST_F(TrackerTest, ConvergesWithPixelStride) {
+  TrackOptions o;
+  o.pixel_stride = 2;
+  o.coarse_levels = 1;
+  expectConvergence(ctx(), *room_, o, 4, 53);
+}
+
+TEST_F(TrackerTest, StartingAtTheSolutionStaysThere) {
+  Preprocessor pre(ctx(), PreprocessOptions{}, room_->intrinsics);
+  pre.process(room_->depth);
+  Tracker tracker(ctx(), TrackOptions{}, room_->intrinsics.width, room_->intrinsics.height);
+  const TrackResult r =
+      tracker.track(room_->device.view, pre.vertexMap().get(), nullptr, room_->T_volume_camera_gt);
+  EXPECT_LT(translationError(room_->T_volume_camera_gt, r.T_volume_camera), 2e-4);
+  EXPECT_LT(rotationError(room_->T_volume_camera_gt, r.T_volume_camera), 0.02 * kDeg);
+  EXPECT_TRUE(r.converged);
+  EXPECT_FALSE(r.lost) << r.loss_reason;
+  EXPECT_GT(r.inverse_condition, TrackOptions{}.min_inverse_condition);
+}
+
+TEST_F(TrackerTest, FeaturelessPlaneIsDegenerate) {
+  test::AnalyticScene wall;
+  // A tilted wall (normal not along an axis): n . x = n . (1.28, 1.28, 2.3).
+  const Eigen::Vector3f n = Eigen::Vector3f(0.2f, -0.3f, -1.0f).normalized();
+  wall.planes.push_back({n, n.dot(Eigen::Vector3f(1.28f, 1.28f, 2.3f))});
+  const SyntheticWorld world = makeWorld(
+      ctx(), wall, test::lookAt(Eigen::Vector3d(1.28, 1.28, 0.6), Eigen::Vector3d(1.3, 1.3, 2.3)));
+  Preprocessor pre(ctx(), PreprocessOptions{}, world.intrinsics);
+  pre.process(world.depth);
+  Tracker tracker(ctx(), TrackOptions{}, world.intrinsics.width, world.intrinsics.height);
+  std::mt19937 rng(61);
+  const TrackResult r = tracker.track(world.device.view, pre.vertexMap().get(), nullptr,
+                                      perturb(world.T_volume_camera_gt, rng, 0.02, 1 * kDeg));
+  EXPECT_TRUE(r.lost);
+  EXPECT_EQ(r.loss, TrackLoss::kDegenerate) << r.loss_reason;
+  EXPECT_LT(r.inverse_condition, TrackOptions{}.min_inverse_condition);
+  EXPECT_NE(r.loss_reason.find("track.min_inverse_condition"), std::string::npos);
+  // The constrained directions (distance to the wall, tilt) are still recovered.
+  EXPECT_GT(r.inlier_ratio, 0.95);
+}
+
+TEST_F(TrackerTest, DifferentSceneIsLost) {
+  // A cluster of boxes floating in front of the camera, nothing behind them: not the room.
+  test::AnalyticScene other;
+  std::mt19937 rng(71);
+  std::uniform_real_distribution<float> u(-0.5f, 0.5f);
+  for (int i = 0; i < 8; ++i) {
+    other.boxes.push_back({Eigen::Vector3f(u(rng), u(rng) * 0.6f, 1.3f + u(rng)),
+                           Eigen::Vector3f(0.12f, 0.12f, 0.12f)});
+  }
+  const cv::Mat depth = other.render(room_->intrinsics, Eigen::Isometry3d::Identity());
+  ASSERT_GT(cv::countNonZero(depth == depth), 5000);
+  Preprocessor pre(ctx(), PreprocessOptions{}, room_->intrinsics);
+  pre.process(depth);
+  Tracker tracker(ctx(), TrackOptions{}, room_->intrinsics.width, room_->intrinsics.height);
+  const TrackResult r =
+      tracker.track(room_->device.view, pre.vertexMap().get(), nullptr, room_->T_volume_camera_gt);
+  EXPECT_TRUE(r.lost);
+  // LM drags the boxes far across the room to fit some walls: the motion rule fires.
+  EXPECT_EQ(r.loss, TrackLoss::kLargeMotion) << r.loss_reason;
+  EXPECT_GT(r.motion_m, TrackOptions{}.max_motion_m);
+  EXPECT_NE(r.loss_reason.find("track.max_motion_m"), std::string::npos);
+  // With the motion rule off, the other rules still report the frame lost.
+  TrackOptions o;
+  o.max_motion_m = 100.0;
+  o.max_motion_deg = 180.0;
+  Tracker unbounded(ctx(), o, room_->intrinsics.width, room_->intrinsics.height);
+  const TrackResult r2 = unbounded.track(room_->device.view, pre.vertexMap().get(), nullptr,
+                                         room_->T_volume_camera_gt);
+  EXPECT_TRUE(r2.lost);
+  EXPECT_NE(r2.loss, TrackLoss::kLargeMotion);
+}
+
+TEST_F(TrackerTest, EmptyFrameIsLostWithoutDepth) {
+  const cv::Mat depth(room_->intrinsics.height, room_->intrinsics.width, CV_32F,
+                      cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  Preprocessor pre(ctx(), PreprocessOptions{}, room_->intrinsics);
+  pre.process(depth);
+  Tracker tracker(ctx(), TrackOptions{}, room_->intrinsics.width, room_->intrinsics.height);
+  const TrackResult r =
+      tracker.track(room_->device.view, pre.vertexMap().get(), nullptr, room_->T_volume_camera_gt);
+  EXPECT_TRUE(r.lost);
+  EXPECT_EQ(r.loss, TrackLoss::kNoDepth);
+  EXPECT_EQ(r.iterations, 0);
+  EXPECT_TRUE(r.T_volume_camera.isApprox(room_->T_volume_camera_gt));
+}
+
+TEST_F(TrackerTest, BadArgumentsAreClearErrors) {
+  TrackOptions o;
+  o.final_reduction = "gpu";
+  EXPECT_THROW(Tracker(ctx(), o, 320, 240), ConfigError);
+  EXPECT_THROW(Tracker(ctx(), TrackOptions{}, 0, 240), InvalidArgument);
+  Tracker tracker(ctx(), TrackOptions{}, 320, 240);
+  map::VolumeDeviceView empty;
+  try {
+    tracker.evaluate(empty, room_->device.view.voxels, nullptr, Eigen::Isometry3d::Identity(), 1);
+    FAIL();
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("invalid volume view"), std::string::npos);
+  }
+}
+
+TEST(TrackLossRule, BalancedInverseCondition) {
+  // Isotropic information is perfectly conditioned whatever the rotation scale.
+  Matrix6d H = Matrix6d::Identity();
+  H.bottomRightCorner<3, 3>() *= 25.0;
+  EXPECT_NEAR(balancedInverseCondition(H), 1.0, 1e-12);
+  // A plane z = const constrains tz, rx, ry only.
+  H.setZero();
+  H(2, 2) = 1.0;
+  H(3, 3) = 4.0;
+  H(4, 4) = 4.0;
+  EXPECT_EQ(balancedInverseCondition(H), 0.0);
+  EXPECT_EQ(balancedInverseCondition(Matrix6d::Zero()), 0.0);
+}
+
+// ---- real data: TUM fr1/xyz pair with motion-capture ground truth ---------------------------
+
+io::Intrinsics tumIntrinsics() {
+  io::Intrinsics k;
+  k.fx = k.fy = 525.0;
+  k.cx = 319.5;
+  k.cy = 239.5;
+  k.width = 640;
+  k.height = 480;
+  return k;
+}
+
+struct RealPair {
+  std::unique_ptr<test::HostVolume> host;
+  test::DeviceVolume device;
+  Eigen::Isometry3d T_volume_prev;
+  Eigen::Isometry3d T_prev_curr_gt;
+  cv::Mat depth_curr;
+};
+
+// Volume of the first frame (5.12 m at 1 cm, camera at the centre of one face looking in),
+// fused with the CPU reference fusion.
+RealPair makeRealPair(cl::Context& ctx, const std::string& case_dir) {
+  RealPair p;
+  const std::string dir = test::dataPath("tum-fr1-xyz-pairs/" + case_dir);
+  const cv::Mat depth_prev = test::readDepthPng(dir + "/dep_prev.png", 5000.0);
+  p.depth_curr = test::readDepthPng(dir + "/dep_curr.png", 5000.0);
+  p.T_prev_curr_gt = test::readPoseTxt(dir + "/pose_prev.txt").inverse() *
+                     test::readPoseTxt(dir + "/pose_curr.txt");
+  p.host = std::make_unique<test::HostVolume>(Eigen::Vector3i(64, 64, 64), 0.01f, 0.1f);
+  p.T_volume_prev = Eigen::Isometry3d::Identity();
+  p.T_volume_prev.translation() << 2.56, 2.56, 0.0;
+  test::fuseDepth(p.host.get(), depth_prev, tumIntrinsics(), p.T_volume_prev, 64.0f);
+  p.device = test::upload(ctx, *p.host);
+  return p;
+}
+
+TEST_F(TrackerTest, RealPairAccumulationMatchesReference) {
+  const RealPair p = makeRealPair(ctx(), "case_1");
+  const PreprocessedFrame frame =
+      preprocessReference(p.depth_curr, tumIntrinsics(), PreprocessOptions{});
+  cl::MemHandle vertex =
+      ctx().buffer(CL_MEM_READ_ONLY, frame.vertex.total() * sizeof(cv::Vec4f), frame.vertex.data);
+  Tracker tracker(ctx(), TrackOptions{}, 640, 480);
+  const NormalEquations ref = accumulateReference(p.host->view(), frame.vertex, cv::Mat(), 1,
+                                                  p.T_volume_prev, 0.2 * p.host->truncation_m);
+  expectNormalEquationsNear(
+      tracker.evaluate(p.device.view, vertex.get(), nullptr, p.T_volume_prev, 1), ref);
+}
+
+TEST_F(TrackerTest, RealPairRecoversGroundTruthMotion) {
+  for (const char* case_dir : {"case_1", "case_2"}) {
+    SCOPED_TRACE(case_dir);
+    const RealPair p = makeRealPair(ctx(), case_dir);
+    Preprocessor pre(ctx(), PreprocessOptions{}, tumIntrinsics());
+    pre.process(p.depth_curr);
+    Tracker tracker(ctx(), TrackOptions{}, 640, 480);
+    const TrackResult r =
+        tracker.track(p.device.view, pre.vertexMap().get(), nullptr, p.T_volume_prev);
+    const Eigen::Isometry3d T_prev_curr = p.T_volume_prev.inverse() * r.T_volume_camera;
+    const double t_err = translationError(p.T_prev_curr_gt, T_prev_curr);
+    const double r_err = rotationError(p.T_prev_curr_gt, T_prev_curr);
+    // Identity start: off by the true motion (22 mm / 1.4 deg and 52 mm / 2.7 deg). The mocap
+    // ground truth of these pairs and the nominal intrinsics agree with depth-only alignment to
+    // only ~4 mm / 0.3-0.8 deg (a projective point-to-plane ICP of the two frames, tried while
+    // writing this test, is off by 4.4 mm / 0.17 deg and 5.7 mm / 0.70 deg), hence the bounds.
+    EXPECT_LT(t_err, 6e-3);
+    EXPECT_LT(r_err, 1.0 * kDeg);
+    EXPECT_LT(t_err, 0.3 * translationNorm(p.T_prev_curr_gt));
+    EXPECT_FALSE(r.lost) << r.loss_reason;
+    EXPECT_TRUE(r.converged);
+    // The same minimum is reached from the ground truth: the bound above is the data's.
+    const TrackResult from_gt = tracker.track(p.device.view, pre.vertexMap().get(), nullptr,
+                                              p.T_volume_prev * p.T_prev_curr_gt);
+    EXPECT_LT(translationError(from_gt.T_volume_camera, r.T_volume_camera), 2e-4);
+    EXPECT_LT(rotationError(from_gt.T_volume_camera, r.T_volume_camera), 0.02 * kDeg);
+  }
+}
+
+TEST_F(TrackerTest, RealFrameOfAnotherSceneIsLost) {
+  const RealPair p = makeRealPair(ctx(), "case_1");
+  io::Intrinsics k;
+  k.fx = k.fy = 585.0;
+  k.cx = 320.0;
+  k.cy = 240.0;
+  k.width = 640;
+  k.height = 480;
+  const cv::Mat kitchen =
+      test::readDepthPng(test::dataPath("redkitchen-0-299/depth/000000.png"), 1000.0);
+  Preprocessor pre(ctx(), PreprocessOptions{}, k);
+  pre.process(kitchen);
+  Tracker tracker(ctx(), TrackOptions{}, 640, 480);
+  const TrackResult r =
+      tracker.track(p.device.view, pre.vertexMap().get(), nullptr, p.T_volume_prev);
+  EXPECT_TRUE(r.lost) << "inliers " << r.inlier_ratio << " valid " << r.valid_fraction
+                      << " inv cond " << r.inverse_condition;
+  EXPECT_EQ(r.loss, TrackLoss::kFewValidPoints) << r.loss_reason;
+}
+
+}  // namespace
+}  // namespace emf::track
