@@ -1,8 +1,9 @@
 // Ray casting of one or several volumes into a depth (camera z, metres), normal (camera frame,
 // unit, pointing to the free side) and volume-id image. One pass per volume over the same
 // outputs with a depth test: a pass writes a pixel only where its hit is nearer than what the
-// previous passes wrote, so after all passes every pixel shows the nearest surface of all
-// volumes ("nothing nearer lies on the ray"). raycast_clear starts a render.
+// previous passes wrote (plus depth_margin: objects rendered after the background win ties with
+// the background's copy of the same surface), so after all passes every pixel shows the nearest
+// surface of all volumes ("nothing nearer lies on the ray"). raycast_clear starts a render.
 //
 // Per pixel and volume: the ray (parameter t = camera z) is clipped to [near, far], to the
 // volume box and to the depth already written. Unallocated blocks are skipped whole (jump to the
@@ -52,6 +53,7 @@ __kernel void raycast_volume(__global const int* index, __global const int* coun
                              const float4 r1, const float4 r2, const int width, const int height,
                              const float fx, const float fy, const float cx, const float cy,
                              const float near_z, const float far_z, const int volume_id,
+                             const float depth_margin,
                              __global float* depth_out, __global float4* normal_out,
                              __global int* id_out) {
   const int x = get_global_id(0);
@@ -63,7 +65,7 @@ __kernel void raycast_volume(__global const int* index, __global const int* coun
   const float3 d = emf_rotate(r0, r1, r2, ray);
   const float current = depth_out[pixel];
   float t0 = near_z;
-  float t1 = emf_is_valid(current) ? fmin(far_z, current) : far_z;
+  float t1 = emf_is_valid(current) ? fmin(far_z, current + depth_margin) : far_z;
   const float block_m = (float)EMF_BLOCK * voxel_size;
   if (!emf_clip_slab(o.x, d.x, (float)dims.x * block_m, &t0, &t1)) return;
   if (!emf_clip_slab(o.y, d.y, (float)dims.y * block_m, &t0, &t1)) return;

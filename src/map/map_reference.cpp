@@ -157,8 +157,8 @@ float blockExit(const Eigen::Vector3f& o, const Eigen::Vector3f& d, const Eigen:
 }
 
 /// raycast_volume for one pixel.
-void castPixel(const VolumeHostData& vol, int id, const CameraF& cam, const PoseRows& T,
-               const MapOptions& options, int x, int y, RaycastImages* out) {
+void castPixel(const VolumeHostData& vol, int id, float depth_margin, const CameraF& cam,
+               const PoseRows& T, const MapOptions& options, int x, int y, RaycastImages* out) {
   const VolumeHostView view = vol.view();
   const float voxel_size = vol.voxel_size_m;
   const float truncation = vol.truncation_m;
@@ -168,7 +168,7 @@ void castPixel(const VolumeHostData& vol, int id, const CameraF& cam, const Pose
   const float current = out->depth.at<float>(y, x);
   const float far_z = static_cast<float>(options.raycast_max_depth_m);
   float t0 = static_cast<float>(options.raycast_min_depth_m);
-  float t1 = valid(current) ? std::fmin(far_z, current) : far_z;
+  float t1 = valid(current) ? std::fmin(far_z, current + depth_margin) : far_z;
   const float block_m = static_cast<float>(kBlockSize) * voxel_size;
   for (int k = 0; k < 3; ++k) {
     if (!clipSlab(o[k], d[k], static_cast<float>(vol.dims_blocks[k]) * block_m, &t0, &t1)) return;
@@ -268,7 +268,7 @@ RaycastImages raycastReference(const std::vector<HostRenderItem>& volumes, const
     const PoseRows T = PoseRows::from(item.volume->T_world_volume.inverse() * T_world_camera);
     for (int y = 0; y < cam.height; ++y) {
       for (int x = 0; x < cam.width; ++x)
-        castPixel(*item.volume, item.id, cam, T, options, x, y, &out);
+        castPixel(*item.volume, item.id, item.depth_margin_m, cam, T, options, x, y, &out);
     }
   }
   return out;

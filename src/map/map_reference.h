@@ -35,6 +35,7 @@ std::vector<int> blockListReference(const VolumeHostData& vol, const std::vector
 struct HostRenderItem {
   const VolumeHostData* volume = nullptr;
   int id = 0;
+  float depth_margin_m = 0.0f;
 };
 
 /// Output of raycastReference (same conventions as RayCaster).

@@ -71,12 +71,16 @@ struct Crossing {
 };
 
 /// Closed loops of crossing edges of one cube (max 4 loops of up to 12 edges). Returns the
-/// number of loops; loop i has lengths[i] edges in loops[i].
-int cubeLoops(const float f[8], int loops[4][12], int lengths[4]) {
+/// number of loops; loop i has lengths[i] edges in loops[i]. simple[i] is false when two of the
+/// loop's segments lie on the same cube face: a fan from one of its vertices could then put a
+/// diagonal on that face, where the neighbouring cube may put the same one.
+int cubeLoops(const float f[8], int loops[4][12], int lengths[4], bool simple[4]) {
   const CubeTopology& topo = topology();
   int next[12];
+  int segment_face[12];
   for (int& n : next) n = -1;
-  for (const auto& face : topo.face) {
+  for (int fi = 0; fi < 6; ++fi) {
+    const auto& face = topo.face[fi];
     Crossing x[4];
     int nx = 0;
     for (int i = 0; i < 4; ++i) {
@@ -88,6 +92,7 @@ int cubeLoops(const float f[8], int loops[4][12], int lengths[4]) {
       const Crossing& en = x[0].entering ? x[0] : x[1];
       const Crossing& le = x[0].entering ? x[1] : x[0];
       next[en.edge] = le.edge;
+      segment_face[en.edge] = fi;
     } else if (nx == 4) {
       // Inside corners joined through the face centre when its (bilinear) value is inside.
       const float centre = 0.25f * (f[face[0]] + f[face[1]] + f[face[2]] + f[face[3]]);
@@ -96,6 +101,7 @@ int cubeLoops(const float f[8], int loops[4][12], int lengths[4]) {
         if (!x[i].entering) continue;
         const int j = inside_connected ? (i + 3) % 4 : (i + 1) % 4;
         next[x[i].edge] = x[j].edge;
+        segment_face[x[i].edge] = fi;
       }
     }
   }
@@ -106,8 +112,12 @@ int cubeLoops(const float f[8], int loops[4][12], int lengths[4]) {
     int len = 0;
     int e = start;
     bool closed = false;
+    int faces_seen = 0;
+    simple[count] = true;
     while (len < 12 && e >= 0 && !used[e]) {
       used[e] = true;
+      if (faces_seen & (1 << segment_face[e])) simple[count] = false;
+      faces_seen |= 1 << segment_face[e];
       loops[count][len++] = e;
       e = next[e];
       if (e == start) {
@@ -178,7 +188,8 @@ Mesh extractMesh(const VolumeHostData& vol, const MeshOptions& options) {
           }
           int loops[4][12];
           int lengths[4];
-          const int nloops = cubeLoops(f, loops, lengths);
+          bool simple[4];
+          const int nloops = cubeLoops(f, loops, lengths, simple);
           for (int l = 0; l < nloops; ++l) {
             int ids[12];
             for (int k = 0; k < lengths[l]; ++k) {
@@ -199,12 +210,26 @@ Mesh extractMesh(const VolumeHostData& vol, const MeshOptions& options) {
               }
               ids[k] = it->second;
             }
-            for (int k = 1; k + 1 < lengths[l]; ++k) {
-              const Eigen::Vector3i tri(ids[0], ids[k], ids[k + 1]);
+            auto add_triangle = [&](const Eigen::Vector3i& tri) {
               mesh.triangles.push_back(tri);
               const Eigen::Vector3f nrm = (mesh.vertices[tri[1]] - mesh.vertices[tri[0]])
                                               .cross(mesh.vertices[tri[2]] - mesh.vertices[tri[0]]);
               for (int c = 0; c < 3; ++c) face_normal_sum[tri[c]] += nrm;
+            };
+            if (simple[l]) {
+              for (int k = 1; k + 1 < lengths[l]; ++k) {
+                add_triangle(Eigen::Vector3i(ids[0], ids[k], ids[k + 1]));
+              }
+            } else {
+              // Fan around a vertex at the loop's centroid, inside this cube only.
+              Eigen::Vector3f centre = Eigen::Vector3f::Zero();
+              for (int k = 0; k < lengths[l]; ++k) centre += mesh.vertices[ids[k]];
+              const int c = static_cast<int>(mesh.vertices.size());
+              mesh.vertices.push_back(centre / static_cast<float>(lengths[l]));
+              face_normal_sum.push_back(Eigen::Vector3f::Zero());
+              for (int k = 0; k < lengths[l]; ++k) {
+                add_triangle(Eigen::Vector3i(c, ids[k], ids[(k + 1) % lengths[l]]));
+              }
             }
           }
         }

@@ -55,7 +55,7 @@ void RayCaster::render(const std::vector<RenderItem>& volumes, const io::Intrins
                 static_cast<cl_float>(k.fy), static_cast<cl_float>(k.cx),
                 static_cast<cl_float>(k.cy), static_cast<cl_float>(options_.raycast_min_depth_m),
                 static_cast<cl_float>(options_.raycast_max_depth_m), static_cast<cl_int>(item.id),
-                depth_, normals_, ids_);
+                static_cast<cl_float>(item.depth_margin_m), depth_, normals_, ids_);
     cl::enqueue(ctx_.queue(), cast_, static_cast<size_t>(width_), static_cast<size_t>(height_), 0,
                 16, 8);
   }
