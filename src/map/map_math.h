@@ -58,16 +58,23 @@ inline Eigen::Vector3f voxelCentre(const Eigen::Vector3i& v, float voxel_size_m)
                          (static_cast<float>(v.z()) + 0.5f) * voxel_size_m);
 }
 
-/// Nearest pixel of a camera-frame point with z > 0, or false outside the image (emf_project).
-inline bool projectToPixel(const Eigen::Vector3f& pc, const CameraF& cam, int* x, int* y) {
-  const float u = cam.fx * (pc.x() / pc.z()) + cam.cx;
-  const float v = cam.fy * (pc.y() / pc.z()) + cam.cy;
-  const int xi = static_cast<int>(std::floor(u + 0.5f));
-  const int yi = static_cast<int>(std::floor(v + 0.5f));
-  if (xi < 0 || yi < 0 || xi >= cam.width || yi >= cam.height) return false;
-  *x = xi;
-  *y = yi;
+/// Nearest pixel of a camera-frame point, or false when z <= 0 or outside the image
+/// (emf_project; inv_z = 1 / pc.z).
+inline bool projectToPixel(const Eigen::Vector3f& pc, float inv_z, const CameraF& cam, int* x,
+                           int* y) {
+  const float u = cam.fx * (pc.x() * inv_z) + cam.cx + 0.5f;
+  const float v = cam.fy * (pc.y() * inv_z) + cam.cy + 0.5f;
+  const bool in_view = pc.z() > 0.0f && u >= 0.0f && v >= 0.0f &&
+                       u < static_cast<float>(cam.width) && v < static_cast<float>(cam.height);
+  if (!in_view) return false;
+  *x = static_cast<int>(u);
+  *y = static_cast<int>(v);
   return true;
+}
+
+/// projectToPixel computing inv_z itself.
+inline bool projectToPixel(const Eigen::Vector3f& pc, const CameraF& cam, int* x, int* y) {
+  return projectToPixel(pc, 1.0f / pc.z(), cam, x, y);
 }
 
 /// Viewing ray of pixel (x, y) scaled to z = 1 (emf_pixel_ray).

@@ -23,7 +23,13 @@ RayCaster::RayCaster(cl::Context& ctx, const MapOptions& options, int max_width,
   depth_ = ctx_.buffer(CL_MEM_READ_WRITE, n * sizeof(float));
   normals_ = ctx_.buffer(CL_MEM_READ_WRITE, n * sizeof(cl_float4));
   ids_ = ctx_.buffer(CL_MEM_READ_WRITE, n * sizeof(cl_int));
+  const size_t tiles = static_cast<size_t>((max_width + kRayTile - 1) / kRayTile) *
+                       static_cast<size_t>((max_height + kRayTile - 1) / kRayTile);
+  tile_min_ = ctx_.buffer(CL_MEM_READ_WRITE, tiles * sizeof(cl_int));
+  tile_max_ = ctx_.buffer(CL_MEM_READ_WRITE, tiles * sizeof(cl_int));
   clear_ = ctx_.kernel("raycast", "raycast_clear");
+  clear_bounds_ = ctx_.kernel("raycast", "raycast_clear_bounds");
+  bounds_ = ctx_.kernel("raycast", "raycast_bounds");
   cast_ = ctx_.kernel("raycast", "raycast_volume");
 }
 
@@ -38,6 +44,8 @@ void RayCaster::render(const std::vector<RenderItem>& volumes, const io::Intrins
   width_ = k.width;
   height_ = k.height;
   const cl_int n = width_ * height_;
+  const cl_int tiles_x = (width_ + kRayTile - 1) / kRayTile;
+  const cl_int tiles = tiles_x * ((height_ + kRayTile - 1) / kRayTile);
   cl::setArgs(clear_, depth_, normals_, ids_, n);
   cl::enqueue(ctx_.queue(), clear_, static_cast<size_t>(n), 0, 0, 256);
   for (const RenderItem& item : volumes) {
@@ -46,6 +54,20 @@ void RayCaster::render(const std::vector<RenderItem>& volumes, const io::Intrins
     const VolumeSpec& s = vol.spec();
     const PoseRows T_volume_camera =
         PoseRows::from(vol.T_world_volume().inverse() * T_world_camera);
+    const PoseRows T_camera_volume =
+        PoseRows::from(T_world_camera.inverse() * vol.T_world_volume());
+    cl::setArgs(clear_bounds_, tile_min_, tile_max_, tiles);
+    cl::enqueue(ctx_.queue(), clear_bounds_, static_cast<size_t>(tiles), 0, 0, 64);
+    const cl_int blocks = s.blockCount();
+    cl::setArgs(bounds_, vol.index(), vol.dimsBlocks(),
+                static_cast<cl_float>(static_cast<float>(kBlockSize) * s.voxel_size_m),
+                row4(T_camera_volume, 0), row4(T_camera_volume, 1), row4(T_camera_volume, 2),
+                static_cast<cl_int>(width_), static_cast<cl_int>(height_),
+                static_cast<cl_float>(k.fx), static_cast<cl_float>(k.fy),
+                static_cast<cl_float>(k.cx), static_cast<cl_float>(k.cy),
+                static_cast<cl_float>(options_.raycast_min_depth_m),
+                static_cast<cl_float>(options_.raycast_max_depth_m), tiles_x, tile_min_, tile_max_);
+    cl::enqueue(ctx_.queue(), bounds_, static_cast<size_t>(blocks), 0, 0, 64);
     cl::setArgs(cast_, vol.index(), vol.countIndex(), static_cast<cl_int>(s.has_counts),
                 vol.dimsBlocks(), vol.pool().voxels(), static_cast<cl_float>(s.voxel_size_m),
                 static_cast<cl_float>(s.truncation_m),
@@ -55,7 +77,8 @@ void RayCaster::render(const std::vector<RenderItem>& volumes, const io::Intrins
                 static_cast<cl_float>(k.fy), static_cast<cl_float>(k.cx),
                 static_cast<cl_float>(k.cy), static_cast<cl_float>(options_.raycast_min_depth_m),
                 static_cast<cl_float>(options_.raycast_max_depth_m), static_cast<cl_int>(item.id),
-                static_cast<cl_float>(item.depth_margin_m), depth_, normals_, ids_);
+                static_cast<cl_float>(item.depth_margin_m), tiles_x, tile_min_, tile_max_, depth_,
+                normals_, ids_);
     cl::enqueue(ctx_.queue(), cast_, static_cast<size_t>(width_), static_cast<size_t>(height_), 0,
                 16, 8);
   }

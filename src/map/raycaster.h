@@ -29,6 +29,10 @@ struct RenderItem {
   float depth_margin_m = 0.0f;
 };
 
+/// Tile edge (pixels) of the per-tile depth ranges that let rays skip empty space
+/// (EMF_RAY_TILE in kernels_cl/raycast.cl).
+constexpr int kRayTile = 16;
+
 class RayCaster {
  public:
   RayCaster(cl::Context& ctx, const MapOptions& options, int max_width, int max_height);
@@ -48,8 +52,9 @@ class RayCaster {
   MapOptions options_;
   int max_width_, max_height_;
   int width_ = 0, height_ = 0;
-  cl::MemHandle depth_, normals_, ids_;
-  cl::KernelHandle clear_, cast_;
+  int tiles_x_ = 0, tiles_y_ = 0;
+  cl::MemHandle depth_, normals_, ids_, tile_min_, tile_max_;
+  cl::KernelHandle clear_, clear_bounds_, bounds_, cast_;
 };
 
 /// Samples psi, weight, gradient and p_fg of a volume at N points (kernels_cl/sdf_sample.cl).

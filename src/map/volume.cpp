@@ -12,8 +12,8 @@ namespace emf::map {
 
 namespace {
 
-constexpr int kIntegrateGroup = 64;  // work-items per block in integrate_blocks (8x8 columns)
-constexpr int kVolumeStateInts = 8;  // layout in kernels_cl/map_alloc.cl (EMF_VOL_*)
+constexpr int kIntegrateGroup = 512;  // work-items per block in integrate_blocks (one per voxel)
+constexpr int kVolumeStateInts = 8;   // layout in kernels_cl/map_alloc.cl (EMF_VOL_*)
 constexpr int kVolumeReport = 4;
 
 int blocksFor(int voxels) { return (voxels + kBlockSize - 1) / kBlockSize; }
@@ -95,6 +95,7 @@ Volume::Volume(VoxelPool& pool, const VolumeSpec& spec, const Eigen::Isometry3d&
   release_ = ctx_.kernel("map_alloc", "release_blocks");
   reindex_ = ctx_.kernel("map_alloc", "reindex_blocks");
   integrate_ = ctx_.kernel("tsdf_integrate", "integrate_blocks");
+  if (spec.has_counts) count_ = ctx_.kernel("tsdf_integrate", "count_blocks");
   createBuffers();
   const int32_t state[kVolumeStateInts] = {0, 0, 0, 0, 0, 0, 0, 0};
   state_ = ctx_.buffer(CL_MEM_READ_WRITE, sizeof(state), state);
@@ -185,19 +186,27 @@ void Volume::integrate(const IntegrationInput& frame) {
   const PoseRows T_camera_volume = PoseRows::from(frame.T_world_camera.inverse() * T_world_volume_);
   const io::Intrinsics& k = frame.intrinsics;
   const MapOptions& o = pool_.options();
-  cl::setArgs(
-      integrate_, block_list_, index_, countIndex(), static_cast<cl_int>(spec_.has_counts),
-      dimsBlocks(), pool_.voxels(), frame.depth->buffer(),
-      frame.weights ? *frame.weights : pool_.dummy(), static_cast<cl_int>(frame.weights != nullptr),
-      frame.fg_mask ? *frame.fg_mask : pool_.dummy(), static_cast<cl_int>(frame.fg_mask != nullptr),
-      static_cast<cl_int>(k.width), static_cast<cl_int>(k.height), static_cast<cl_float>(k.fx),
-      static_cast<cl_float>(k.fy), static_cast<cl_float>(k.cx), static_cast<cl_float>(k.cy),
-      row4(T_camera_volume, 0), row4(T_camera_volume, 1), row4(T_camera_volume, 2),
-      static_cast<cl_float>(spec_.voxel_size_m), static_cast<cl_float>(spec_.truncation_m),
-      static_cast<cl_float>(o.max_weight), static_cast<cl_int>(o.free_space_full_weight));
-  cl::enqueue(ctx_.queue(), integrate_,
-              static_cast<size_t>(last_report_.listed_blocks) * kIntegrateGroup, 0, 0,
-              kIntegrateGroup);
+  const size_t global = static_cast<size_t>(last_report_.listed_blocks) * kIntegrateGroup;
+  cl::setArgs(integrate_, block_list_, index_, dimsBlocks(), pool_.voxels(), frame.depth->buffer(),
+              frame.weights ? *frame.weights : pool_.dummy(),
+              static_cast<cl_int>(frame.weights != nullptr), static_cast<cl_int>(k.width),
+              static_cast<cl_int>(k.height), static_cast<cl_float>(k.fx),
+              static_cast<cl_float>(k.fy), static_cast<cl_float>(k.cx), static_cast<cl_float>(k.cy),
+              row4(T_camera_volume, 0), row4(T_camera_volume, 1), row4(T_camera_volume, 2),
+              static_cast<cl_float>(spec_.voxel_size_m), static_cast<cl_float>(spec_.truncation_m),
+              static_cast<cl_float>(1.0f / spec_.truncation_m), static_cast<cl_float>(o.max_weight),
+              static_cast<cl_int>(o.free_space_full_weight));
+  cl::enqueue(ctx_.queue(), integrate_, global, 0, 0, kIntegrateGroup);
+  if (spec_.has_counts && frame.fg_mask) {
+    cl::setArgs(count_, block_list_, count_index_, dimsBlocks(), pool_.voxels(),
+                frame.depth->buffer(), *frame.fg_mask, static_cast<cl_int>(k.width),
+                static_cast<cl_int>(k.height), static_cast<cl_float>(k.fx),
+                static_cast<cl_float>(k.fy), static_cast<cl_float>(k.cx),
+                static_cast<cl_float>(k.cy), row4(T_camera_volume, 0), row4(T_camera_volume, 1),
+                row4(T_camera_volume, 2), static_cast<cl_float>(spec_.voxel_size_m),
+                static_cast<cl_float>(spec_.truncation_m));
+    cl::enqueue(ctx_.queue(), count_, global, 0, 0, kIntegrateGroup);
+  }
 }
 
 AllocationReport Volume::fuse(const IntegrationInput& frame) {

@@ -148,7 +148,7 @@ class Volume {
   Eigen::Isometry3d T_world_volume_;
   bool has_counts_buffer_ = false;
   cl::MemHandle index_, count_index_, needed_, block_list_, state_;
-  cl::KernelHandle mark_, assign_, finalize_, integrate_, release_, reindex_;
+  cl::KernelHandle mark_, assign_, finalize_, integrate_, count_, release_, reindex_;
   AllocationReport last_report_;
   int32_t report_[4] = {0, 0, 0, 0};
 };
