@@ -174,15 +174,11 @@ float blockExit(const Eigen::Vector3f& o, const Eigen::Vector3f& d, const Eigen:
   return te;
 }
 
-/// raycast_clear_bounds + raycast_bounds: per tile the camera-z range of the blocks covering it.
-struct TileBounds {
-  int tiles_x = 0;
-  std::vector<float> z_min, z_max;
-};
+}  // namespace
 
-TileBounds tileBounds(const VolumeHostData& vol, const CameraF& cam, const PoseRows& T_cv,
-                      const MapOptions& options) {
-  TileBounds tb;
+TileRanges tileRangesReference(const VolumeHostData& vol, const CameraF& cam, const PoseRows& T_cv,
+                               const MapOptions& options) {
+  TileRanges tb;
   tb.tiles_x = (cam.width + kRayTileReference - 1) / kRayTileReference;
   const int tiles_y = (cam.height + kRayTileReference - 1) / kRayTileReference;
   tb.z_min.assign(static_cast<size_t>(tb.tiles_x * tiles_y), kInf);
@@ -238,8 +234,10 @@ TileBounds tileBounds(const VolumeHostData& vol, const CameraF& cam, const PoseR
   return tb;
 }
 
+namespace {
+
 /// raycast_volume for one pixel.
-void castPixel(const VolumeHostData& vol, int id, float depth_margin, const TileBounds& tiles,
+void castPixel(const VolumeHostData& vol, int id, float depth_margin, const TileRanges& tiles,
                const CameraF& cam, const PoseRows& T, const MapOptions& options, int x, int y,
                RaycastImages* out) {
   const VolumeHostView view = vol.view();
@@ -349,9 +347,9 @@ RaycastImages raycastReference(const std::vector<HostRenderItem>& volumes, const
   out.ids = cv::Mat(cam.height, cam.width, CV_32SC1, cv::Scalar(-1));
   for (const HostRenderItem& item : volumes) {
     const PoseRows T = PoseRows::from(item.volume->T_world_volume.inverse() * T_world_camera);
-    const TileBounds tb =
-        tileBounds(*item.volume, cam,
-                   PoseRows::from(T_world_camera.inverse() * item.volume->T_world_volume), options);
+    const TileRanges tb = tileRangesReference(
+        *item.volume, cam, PoseRows::from(T_world_camera.inverse() * item.volume->T_world_volume),
+        options);
     for (int y = 0; y < cam.height; ++y) {
       for (int x = 0; x < cam.width; ++x)
         castPixel(*item.volume, item.id, item.depth_margin_m, tb, cam, T, options, x, y, &out);

@@ -45,7 +45,18 @@ struct RaycastImages {
   cv::Mat ids;      // CV_32S, -1 = none
 };
 
-/// raycast_clear + raycast_volume for each item in order.
+/// Per tile of kRayTile^2 pixels, the camera-z range [z_min, z_max] of the allocated blocks
+/// whose projection covers it (z_min = inf, z_max = 0 where none does).
+struct TileRanges {
+  int tiles_x = 0;
+  std::vector<float> z_min, z_max;
+};
+
+/// raycast_clear_bounds + raycast_bounds for one volume seen with T_camera_volume.
+TileRanges tileRangesReference(const VolumeHostData& vol, const CameraF& cam,
+                               const PoseRows& T_camera_volume, const MapOptions& options);
+
+/// raycast_clear + raycast_bounds + raycast_volume for each item in order.
 RaycastImages raycastReference(const std::vector<HostRenderItem>& volumes, const CameraF& cam,
                                const Eigen::Isometry3d& T_world_camera, const MapOptions& options);
 

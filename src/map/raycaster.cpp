@@ -101,6 +101,15 @@ void RayCaster::download(cv::Mat* depth, cv::Mat* normals, cv::Mat* ids) const {
   }
 }
 
+void RayCaster::downloadTileRanges(std::vector<float>* z_min, std::vector<float>* z_max) const {
+  const size_t tiles = static_cast<size_t>((width_ + kRayTile - 1) / kRayTile) *
+                       static_cast<size_t>((height_ + kRayTile - 1) / kRayTile);
+  z_min->resize(tiles);
+  z_max->resize(tiles);
+  ctx_.read(tile_min_, z_min->data(), tiles * sizeof(float));  // float bits stored as int
+  ctx_.read(tile_max_, z_max->data(), tiles * sizeof(float));
+}
+
 SdfSampler::SdfSampler(cl::Context& ctx)
     : ctx_(ctx), kernel_(ctx.kernel("sdf_sample", "sample_sdf_points")) {}
 

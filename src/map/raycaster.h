@@ -46,6 +46,8 @@ class RayCaster {
   const cl::MemHandle& ids() const { return ids_; }
   /// Downloads the last render (CV_32F depth, CV_32FC3 normals, CV_32S ids); any may be null.
   void download(cv::Mat* depth, cv::Mat* normals, cv::Mat* ids) const;
+  /// The per-tile camera-z ranges of the last volume rendered (tests; allocates).
+  void downloadTileRanges(std::vector<float>* z_min, std::vector<float>* z_max) const;
 
  private:
   cl::Context& ctx_;

@@ -62,6 +62,19 @@ TEST_F(Raycast, BackgroundMatchesReferenceAndTheScene) {
   cv::Mat depth, normals, ids;
   caster.download(&depth, &normals, &ids);
   const map::VolumeHostData h = vol.download();
+  // raycast_bounds: the per-tile depth ranges equal the reference exactly.
+  std::vector<float> z_min, z_max;
+  caster.downloadTileRanges(&z_min, &z_max);
+  const map::TileRanges ranges = map::tileRangesReference(
+      h, cameraF(k), map::PoseRows::from(Tv.inverse() * vol.T_world_volume()), o);
+  ASSERT_EQ(z_min.size(), ranges.z_min.size());
+  int covered = 0;
+  for (size_t i = 0; i < z_min.size(); ++i) {
+    ASSERT_EQ(z_min[i], ranges.z_min[i]) << "tile " << i;
+    ASSERT_EQ(z_max[i], ranges.z_max[i]) << "tile " << i;
+    covered += std::isfinite(z_min[i]);
+  }
+  EXPECT_GT(covered, static_cast<int>(z_min.size()) / 2);
   const map::RaycastImages ref = map::raycastReference({{&h, 7}}, cameraF(k), Tv, o);
   const Compare c = compareImages(depth, normals, ids, ref);
   const int n = k.width * k.height;
