@@ -21,6 +21,12 @@ struct MapOptions {
   /// Initial camera placement: offset of the camera from the background volume centre along
   /// its viewing axis, as a fraction of the extent (0.5 = centre of one face, looking in).
   double initial_camera_face_offset = 0.5;
+  /// Ray casting: nearest and farthest camera z rendered.
+  double raycast_min_depth_m = 0.1;
+  double raycast_max_depth_m = 8.0;
+  /// Ray casting: step in front of a surface as a fraction of the voxel's psi (at least one
+  /// voxel). Below 1 because projective TSDF overestimates the distance at grazing angles.
+  double raycast_step_fraction = 0.8;
 
   void bind(OptionBinder& b) {
     b.integer("memory_mb", memory_mb, 1, 65536, "MiB", "voxel-block pool budget, all volumes");
@@ -33,6 +39,12 @@ struct MapOptions {
               "integrate free space with weight 1 regardless of association");
     b.real("initial_camera_face_offset", initial_camera_face_offset, 0.0, 0.5, "extent",
            "camera offset from the volume centre along its view axis (0.5 = on a face)");
+    b.real("raycast_min_depth_m", raycast_min_depth_m, 0.0, 100.0, "m",
+           "nearest camera z rendered by ray casting");
+    b.real("raycast_max_depth_m", raycast_max_depth_m, 0.01, 1000.0, "m",
+           "farthest camera z rendered by ray casting");
+    b.real("raycast_step_fraction", raycast_step_fraction, 0.05, 1.0, "",
+           "ray-casting step in front of surfaces as a fraction of psi (>= one voxel)");
   }
 };
 

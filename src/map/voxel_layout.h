@@ -39,6 +39,8 @@ struct VolumeHostView {
   const Voxel* voxels = nullptr;  // the pool's voxels (slot * kBlockVoxels + local)
   float voxel_size_m = 0.01f;
   float truncation_m = 0.1f;
+  /// Object volumes: the count-block index grid (same dims as `index`), else nullptr.
+  const int32_t* count_index = nullptr;
 
   /// Index into `voxels` of voxel v, or -1 (outside the grid / unallocated block).
   int64_t voxelIndex(const Eigen::Vector3i& v) const {
@@ -50,6 +52,14 @@ struct VolumeHostView {
     const Eigen::Vector3i l = v - b * kBlockSize;
     return static_cast<int64_t>(slot) * kBlockVoxels + l.x() +
            kBlockSize * (l.y() + kBlockSize * l.z());
+  }
+
+  /// Index into `voxels` of the (Fg, Bg) counts of voxel v, or -1 (no count block).
+  int64_t countIndex(const Eigen::Vector3i& v) const {
+    if (!count_index) return -1;
+    VolumeHostView counts_view = *this;
+    counts_view.index = count_index;
+    return counts_view.voxelIndex(v);
   }
 };
 
@@ -90,6 +100,62 @@ inline bool sampleSdfReference(const VolumeHostView& vol, const Eigen::Vector3f&
   *gradient = Eigen::Vector3f(dx, dy, dz) / vol.voxel_size_m;
   *weight = w;
   return true;
+}
+
+// ---- Foreground/background counts (mirror of the count helpers in voxel_access.clh) --------
+constexpr float kCountScale = 256.0f;  // 8.8 fixed point: one observation = 256
+constexpr float kPfgUnknown = 0.5f;    // p_fg of a voxel without counts
+
+/// (Fg, Bg) of a count voxel stored bit-cast in a Voxel (two uint16).
+inline Eigen::Vector2f counts(const Voxel& raw) {
+  return Eigen::Vector2f(static_cast<float>(static_cast<uint16_t>(raw.tsdf_q)),
+                         static_cast<float>(static_cast<uint16_t>(raw.weight_q))) /
+         kCountScale;
+}
+
+/// p_fg from counts; kPfgUnknown without any.
+inline float pfgFromCounts(float fg, float bg) {
+  const float s = fg + bg;
+  return s > 0.0f ? fg / s : kPfgUnknown;
+}
+
+/// CPU reference of emf_add_counts.
+inline Voxel addCounts(const Voxel& raw, float p_fg_det) {
+  uint32_t fg = static_cast<uint16_t>(raw.tsdf_q);
+  uint32_t bg = static_cast<uint16_t>(raw.weight_q);
+  const uint32_t add_fg =
+      static_cast<uint32_t>(std::lrint(std::clamp(p_fg_det, 0.0f, 1.0f) * kCountScale));
+  const uint32_t add_bg = static_cast<uint32_t>(kCountScale) - add_fg;
+  if (fg + add_fg > 65535u || bg + add_bg > 65535u) {
+    fg >>= 1;
+    bg >>= 1;
+  }
+  Voxel out;
+  out.tsdf_q = static_cast<int16_t>(static_cast<uint16_t>(fg + add_fg));
+  out.weight_q = static_cast<int16_t>(static_cast<uint16_t>(bg + add_bg));
+  return out;
+}
+
+/// CPU reference of emf_sample_pfg: trilinear Fg and Bg at p (volume frame, metres), divided.
+inline float samplePfgReference(const VolumeHostView& vol, const Eigen::Vector3f& p) {
+  const Eigen::Vector3f g = p / vol.voxel_size_m - Eigen::Vector3f::Constant(0.5f);
+  const Eigen::Vector3f f0 = g.array().floor();
+  const Eigen::Vector3i v0 = f0.cast<int>();
+  const Eigen::Vector3f f = g - f0;
+  float fg = 0.f, bg = 0.f;
+  for (int n = 0; n < 8; ++n) {
+    const Eigen::Vector3i v = v0 + Eigen::Vector3i(n & 1, (n >> 1) & 1, (n >> 2) & 1);
+    const int64_t i = vol.countIndex(v);
+    if (i < 0) continue;
+    const Eigen::Vector2f c = counts(vol.voxels[i]);
+    const float wx = (n & 1) ? f.x() : 1.f - f.x();
+    const float wy = ((n >> 1) & 1) ? f.y() : 1.f - f.y();
+    const float wz = ((n >> 2) & 1) ? f.z() : 1.f - f.z();
+    const float w = wx * wy * wz;
+    fg += w * c.x();
+    bg += w * c.y();
+  }
+  return pfgFromCounts(fg, bg);
 }
 
 }  // namespace emf::map

@@ -1,0 +1,455 @@
+// map_bench: integration and ray casting speed, memory and mesh accuracy of the map on a real
+// sequence with ground-truth poses (default: ../shared/data/redkitchen-0-299).
+//
+// For each configuration (resolution x voxel size) a fresh pool and background volume fuse every
+// frame at its ground-truth pose, then ray cast from the same pose; afterwards the mesh is
+// extracted and the ground-truth depth points of every --error-every-th frame (full resolution,
+// every 4th pixel, back-projected with the ground-truth pose) are measured against it.
+// Prints one table and one machine-readable line per configuration:
+//   map_bench res=640x480 voxel_m=0.01 integrate_ms=.. integrate_p90_ms=.. raycast_ms=..
+//             raycast_p90_ms=.. blocks=.. bytes_per_voxel=.. pool_mb=.. surface_err_mm=..
+// integrate_ms = allocation + integration of one frame (medians unless marked p90; wall time
+// with the queue drained); upload of the depth image is reported separately.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cl/context.h"
+#include "common/error.h"
+#include "common/log.h"
+#include "map/device_image.h"
+#include "map/mesh.h"
+#include "map/mesh_distance.h"
+#include "map/raycaster.h"
+#include "map/volume.h"
+#include "map/voxel_pool.h"
+
+namespace {
+
+using emf::map::kBlockSize;
+using emf::map::kBlockVoxels;
+using Clock = std::chrono::steady_clock;
+
+// ---- Private TUM-layout loader -------------------------------------------------------------
+// TODO(lead): replace with io::openSource("tum:...") once the dataset reader lands; this only
+// reads what the benchmark needs (associations.txt, groundtruth.txt, calibration.txt, depth PNGs).
+struct BenchFrame {
+  double timestamp = 0;
+  cv::Mat depth_m;  // CV_32F metres, NaN invalid, full resolution
+  Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();
+};
+
+struct BenchSequence {
+  emf::io::Intrinsics intrinsics;
+  std::vector<BenchFrame> frames;
+};
+
+BenchSequence loadTumSequence(const std::string& dir, double depth_scale, int max_frames) {
+  BenchSequence seq;
+  {
+    std::ifstream calib(dir + "/calibration.txt");
+    seq.intrinsics = {585, 585, 320, 240, 640, 480};
+    if (calib) {
+      calib >> seq.intrinsics.fx >> seq.intrinsics.fy >> seq.intrinsics.cx >> seq.intrinsics.cy >>
+          seq.intrinsics.width >> seq.intrinsics.height;
+    }
+  }
+  std::vector<std::pair<double, Eigen::Isometry3d>> gt;
+  {
+    std::ifstream in(dir + "/groundtruth.txt");
+    if (!in) throw emf::IoError(dir + "/groundtruth.txt: cannot open (map_bench needs poses)");
+    std::string line;
+    int line_no = 0;
+    while (std::getline(in, line)) {
+      ++line_no;
+      if (line.empty() || line[0] == '#') continue;
+      std::istringstream ls(line);
+      double t, tx, ty, tz, qx, qy, qz, qw;
+      if (!(ls >> t >> tx >> ty >> tz >> qx >> qy >> qz >> qw)) {
+        throw emf::IoError(dir + "/groundtruth.txt:" + std::to_string(line_no) +
+                           ": expected 'timestamp tx ty tz qx qy qz qw'");
+      }
+      Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+      T.linear() = Eigen::Quaterniond(qw, qx, qy, qz).normalized().toRotationMatrix();
+      T.translation() = Eigen::Vector3d(tx, ty, tz);
+      gt.emplace_back(t, T);
+    }
+  }
+  std::ifstream assoc(dir + "/associations.txt");
+  if (!assoc) throw emf::IoError(dir + "/associations.txt: cannot open");
+  std::string line;
+  int line_no = 0;
+  while (std::getline(assoc, line) &&
+         (max_frames <= 0 || static_cast<int>(seq.frames.size()) < max_frames)) {
+    ++line_no;
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream ls(line);
+    double t_rgb, t_depth;
+    std::string rgb, depth;
+    if (!(ls >> t_rgb >> rgb >> t_depth >> depth)) {
+      throw emf::IoError(dir + "/associations.txt:" + std::to_string(line_no) +
+                         ": expected 'rgb_time rgb_file depth_time depth_file'");
+    }
+    if (depth.find("depth") == std::string::npos) {  // depth listed first
+      std::swap(rgb, depth);
+      std::swap(t_rgb, t_depth);
+    }
+    const auto best = std::min_element(gt.begin(), gt.end(), [&](const auto& a, const auto& b) {
+      return std::abs(a.first - t_depth) < std::abs(b.first - t_depth);
+    });
+    if (best == gt.end() || std::abs(best->first - t_depth) > 0.02) continue;
+    const cv::Mat raw = cv::imread(dir + "/" + depth, cv::IMREAD_UNCHANGED);
+    if (raw.type() != CV_16UC1) {
+      throw emf::IoError(dir + "/" + depth + ": not a 16-bit depth PNG (associations.txt:" +
+                         std::to_string(line_no) + ")");
+    }
+    BenchFrame f;
+    f.timestamp = t_depth;
+    raw.convertTo(f.depth_m, CV_32F, 1.0 / depth_scale);
+    f.depth_m.setTo(std::numeric_limits<float>::quiet_NaN(), raw == 0);
+    f.T_world_camera = best->second;
+    seq.frames.push_back(std::move(f));
+  }
+  return seq;
+}
+// ---- end of the private loader --------------------------------------------------------------
+
+/// 2x2 down-sampling of depth: mean of the valid samples within 3 cm of the nearest one, so
+/// depth edges are not blended into flying pixels. Pixel centres match Intrinsics::scaled.
+cv::Mat halveDepth(const cv::Mat& d) {
+  cv::Mat out(d.rows / 2, d.cols / 2, CV_32FC1);
+  for (int y = 0; y < out.rows; ++y) {
+    for (int x = 0; x < out.cols; ++x) {
+      float v[4] = {d.at<float>(2 * y, 2 * x), d.at<float>(2 * y, 2 * x + 1),
+                    d.at<float>(2 * y + 1, 2 * x), d.at<float>(2 * y + 1, 2 * x + 1)};
+      float lo = std::numeric_limits<float>::infinity();
+      for (float s : v) {
+        if (!std::isnan(s)) lo = std::min(lo, s);
+      }
+      float sum = 0;
+      int n = 0;
+      for (float s : v) {
+        if (!std::isnan(s) && s - lo <= 0.03f) {
+          sum += s;
+          ++n;
+        }
+      }
+      out.at<float>(y, x) =
+          n ? sum / static_cast<float>(n) : std::numeric_limits<float>::quiet_NaN();
+    }
+  }
+  return out;
+}
+
+struct Config {
+  int width, height;
+  double voxel_m;
+};
+
+struct Result {
+  Config config;
+  double integrate_ms = 0, integrate_p90_ms = 0, alloc_ms = 0, upload_ms = 0;
+  double raycast_ms = 0, raycast_p90_ms = 0;
+  double integrate_cpu_ms = 0, raycast_cpu_ms = 0;
+  int blocks = 0, frames = 0;
+  double bytes_per_voxel = 0, pool_used_mb = 0, pool_mb = 0, index_mb = 0;
+  int64_t dropped = 0;
+  double surface_err_mm = 0, surface_coverage = 0, mesh_s = 0;
+  size_t mesh_triangles = 0, error_points = 0;
+  int raycast_valid_pct = 0;
+};
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const size_t i =
+      std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size() - 1) + 0.5));
+  return v[i];
+}
+
+double ms(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+/// CPU time of the whole process (all PoCL worker threads), ms: on a shared machine this is
+/// what the work costs; wall time on an idle 2-core machine is about cpu / 2.
+double cpuMs() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
+}
+
+std::string loadAverage() {
+  std::ifstream in("/proc/loadavg");
+  std::string a, b, c;
+  in >> a >> b >> c;
+  return a + " " + b + " " + c;
+}
+
+Result run(emf::cl::Context& ctx, const BenchSequence& seq, const Config& cfg, int memory_mb,
+           int error_every, const std::string& mesh_dir) {
+  Result r;
+  r.config = cfg;
+  emf::map::MapOptions o;
+  o.memory_mb = memory_mb;
+  o.background_voxel_m = cfg.voxel_m;
+  o.background_resolution = static_cast<int>(std::lround(5.12 / cfg.voxel_m));
+  const bool half = cfg.width * 2 == seq.intrinsics.width;
+  const emf::io::Intrinsics k =
+      half ? seq.intrinsics.scaled(cfg.width, cfg.height) : seq.intrinsics;
+  if (k.width != cfg.width || k.height != cfg.height) {
+    throw emf::InvalidArgument("map_bench: resolution " + std::to_string(cfg.width) + "x" +
+                               std::to_string(cfg.height) + " must be the sequence's or half");
+  }
+  std::vector<cv::Mat> depth;
+  for (const auto& f : seq.frames) depth.push_back(half ? halveDepth(f.depth_m) : f.depth_m);
+
+  const emf::map::VolumeSpec spec = emf::map::VolumeSpec::background(o);
+  const Eigen::Isometry3d T_wv =
+      emf::map::backgroundVolumePose(o, spec, seq.frames.front().T_world_camera);
+  emf::map::DeviceImage image(ctx, k.width, k.height);
+  emf::map::RayCaster caster(ctx, o, k.width, k.height);
+  emf::map::IntegrationInput in;
+  in.depth = &image;
+  in.intrinsics = k;
+  {
+    // Warm-up on a throwaway volume: PoCL specialises kernels on first launch.
+    emf::map::MapOptions wo = o;
+    wo.memory_mb = 16;
+    emf::map::VoxelPool wpool(ctx, wo);
+    emf::map::Volume wvol(wpool, spec, T_wv);
+    image.upload(depth.front(), "depth");
+    in.T_world_camera = seq.frames.front().T_world_camera;
+    wvol.fuse(in);
+    caster.render({{&wvol, 0}}, k, in.T_world_camera);
+    ctx.finish();
+  }
+  emf::map::VoxelPool pool(ctx, o);
+  emf::map::Volume vol(pool, spec, T_wv);
+  std::vector<double> t_int, t_alloc, t_up, t_ray, c_int, c_ray;
+  long valid_px = 0;
+  cv::Mat rc_depth;
+  for (size_t i = 0; i < depth.size(); ++i) {
+    in.T_world_camera = seq.frames[i].T_world_camera;
+    const auto t0 = Clock::now();
+    image.upload(depth[i], "depth");
+    ctx.finish();
+    const auto t1 = Clock::now();
+    const double c1 = cpuMs();
+    vol.allocate(in);  // ends with a blocking read of the report
+    const auto t2 = Clock::now();
+    vol.integrate(in);
+    ctx.finish();
+    const auto t3 = Clock::now();
+    const double c3 = cpuMs();
+    caster.render({{&vol, 0}}, k, in.T_world_camera);
+    ctx.finish();
+    const auto t4 = Clock::now();
+    const double c4 = cpuMs();
+    c_int.push_back(c3 - c1);
+    c_ray.push_back(c4 - c3);
+    t_up.push_back(ms(t0, t1));
+    t_alloc.push_back(ms(t1, t2));
+    t_int.push_back(ms(t1, t3));
+    t_ray.push_back(ms(t3, t4));
+    if (i + 1 == depth.size()) {
+      caster.download(&rc_depth, nullptr, nullptr);
+      valid_px = cv::countNonZero(rc_depth == rc_depth);
+    }
+  }
+  r.frames = static_cast<int>(depth.size());
+  r.integrate_ms = percentile(t_int, 0.5);
+  r.integrate_p90_ms = percentile(t_int, 0.9);
+  r.alloc_ms = percentile(t_alloc, 0.5);
+  r.upload_ms = percentile(t_up, 0.5);
+  r.raycast_ms = percentile(t_ray, 0.5);
+  r.raycast_p90_ms = percentile(t_ray, 0.9);
+  r.integrate_cpu_ms = percentile(c_int, 0.5);
+  r.raycast_cpu_ms = percentile(c_ray, 0.5);
+  r.raycast_valid_pct = static_cast<int>(100 * valid_px / std::max(1, k.width * k.height));
+  const emf::map::PoolStats ps = pool.stats();
+  r.blocks = vol.allocatedBlocks();
+  r.dropped = ps.dropped_blocks;
+  r.pool_mb = static_cast<double>(ps.pool_bytes) / (1 << 20);
+  r.pool_used_mb = static_cast<double>(ps.used_slots) * emf::map::VoxelPool::kSlotBytes / (1 << 20);
+  r.index_mb = static_cast<double>(vol.indexBytes()) / (1 << 20);
+  r.bytes_per_voxel = r.blocks
+                          ? (static_cast<double>(ps.used_slots) * emf::map::VoxelPool::kSlotBytes +
+                             static_cast<double>(vol.indexBytes())) /
+                                (static_cast<double>(r.blocks) * kBlockVoxels)
+                          : 0;
+
+  // Mesh and reconstruction error.
+  const auto m0 = Clock::now();
+  const emf::map::VolumeHostData host = vol.download();
+  const emf::map::Mesh mesh = emf::map::extractMesh(host);
+  r.mesh_s = ms(m0, Clock::now()) / 1000;
+  r.mesh_triangles = mesh.triangles.size();
+  if (!mesh_dir.empty()) {
+    char name[128];
+    std::snprintf(name, sizeof(name), "/map_bench_%dx%d_%gcm.ply", cfg.width, cfg.height,
+                  cfg.voxel_m * 100);
+    emf::map::writePly(mesh_dir + name, mesh, true);
+  }
+  constexpr float kMaxDistM = 0.1f;
+  const emf::map::MeshDistance md(mesh, 0.02f);
+  const Eigen::Vector3d ext = spec.extentM().cast<double>();
+  double sum = 0;
+  size_t found = 0, total = 0;
+  const emf::io::Intrinsics& kf = seq.intrinsics;
+  for (size_t i = 0; i < seq.frames.size(); i += static_cast<size_t>(error_every)) {
+    const BenchFrame& f = seq.frames[i];
+    for (int y = 2; y < f.depth_m.rows; y += 4) {
+      for (int x = 2; x < f.depth_m.cols; x += 4) {
+        const float d = f.depth_m.at<float>(y, x);
+        if (std::isnan(d)) continue;
+        const Eigen::Vector3d pc((x - kf.cx) / kf.fx * d, (y - kf.cy) / kf.fy * d, d);
+        const Eigen::Vector3d pw = f.T_world_camera * pc;
+        const Eigen::Vector3d pv = T_wv.inverse() * pw;
+        if ((pv.array() < 0).any() || (pv.array() > ext.array()).any()) continue;
+        ++total;
+        const float dist = md.distance(pw.cast<float>(), kMaxDistM);
+        if (dist <= kMaxDistM) {
+          sum += dist;
+          ++found;
+        }
+      }
+    }
+  }
+  r.error_points = total;
+  r.surface_err_mm = found ? 1000.0 * sum / static_cast<double>(found) : 0;
+  r.surface_coverage = total ? static_cast<double>(found) / static_cast<double>(total) : 0;
+  return r;
+}
+
+void usage(std::FILE* out) {
+  std::fprintf(out,
+               "usage: map_bench [--data DIR] [--frames N] [--configs WxH@VOXEL_M,...]\n"
+               "                 [--memory-mb MB] [--error-every K] [--depth-scale S]\n"
+               "                 [--mesh-dir DIR]\n"
+               "  --data         TUM-layout folder with associations.txt, groundtruth.txt\n"
+               "                 (default ../shared/data/redkitchen-0-299)\n"
+               "  --frames       frames to use (default all)\n"
+               "  --configs      default 640x480@0.01,640x480@0.02,320x240@0.01,320x240@0.02\n"
+               "  --memory-mb    voxel pool budget (default 256)\n"
+               "  --error-every  measure mesh error on every K-th frame (default 30)\n"
+               "  --depth-scale  depth PNG units per metre (default 1000, 7-Scenes)\n"
+               "  --mesh-dir     also write each mesh as binary PLY there\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string data = std::string(EMF_SOURCE_DIR) + "/../shared/data/redkitchen-0-299";
+  std::string configs = "640x480@0.01,640x480@0.02,320x240@0.01,320x240@0.02";
+  std::string mesh_dir;
+  int frames = 0, memory_mb = 256, error_every = 30;
+  double depth_scale = 1000;
+  try {
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      auto value = [&]() -> std::string {
+        if (i + 1 >= argc) throw emf::InvalidArgument(a + " needs a value");
+        return argv[++i];
+      };
+      if (a == "--help" || a == "-h") {
+        usage(stdout);
+        return 0;
+      } else if (a == "--data") {
+        data = value();
+      } else if (a == "--frames") {
+        frames = std::stoi(value());
+      } else if (a == "--configs") {
+        configs = value();
+      } else if (a == "--memory-mb") {
+        memory_mb = std::stoi(value());
+      } else if (a == "--error-every") {
+        error_every = std::max(1, std::stoi(value()));
+      } else if (a == "--depth-scale") {
+        depth_scale = std::stod(value());
+      } else if (a == "--mesh-dir") {
+        mesh_dir = value();
+      } else {
+        std::fprintf(stderr, "map_bench: unknown option '%s'\n", a.c_str());
+        usage(stderr);
+        return 2;
+      }
+    }
+    std::vector<Config> cfgs;
+    std::stringstream cs(configs);
+    std::string item;
+    while (std::getline(cs, item, ',')) {
+      Config c{};
+      if (std::sscanf(item.c_str(), "%dx%d@%lf", &c.width, &c.height, &c.voxel_m) != 3 ||
+          c.voxel_m <= 0) {
+        std::fprintf(stderr, "map_bench: bad configuration '%s' (expected WxH@VOXEL_M)\n",
+                     item.c_str());
+        return 2;
+      }
+      cfgs.push_back(c);
+    }
+    emf::setLogLevel(emf::LogLevel::kWarning);
+    const BenchSequence seq = loadTumSequence(data, depth_scale, frames);
+    if (seq.frames.empty()) throw emf::IoError(data + ": no frames with ground-truth poses");
+    emf::cl::Context ctx{emf::cl::ClOptions{}};
+    std::printf("map_bench: %s, %zu frames; device %s; load average before: %s\n", data.c_str(),
+                seq.frames.size(), ctx.device().describe().c_str(), loadAverage().c_str());
+    std::vector<Result> results;
+    for (const Config& c : cfgs) {
+      results.push_back(run(ctx, seq, c, memory_mb, error_every, mesh_dir));
+    }
+    std::printf("load average after: %s\n\n", loadAverage().c_str());
+    std::printf(
+        "%-9s %6s | %8s %8s %8s %8s %7s | %8s %8s %8s %5s | %7s %7s %7s %6s %6s | %8s %6s %9s "
+        "%6s\n",
+        "res", "voxel", "integ", "int_p90", "int_cpu", "alloc", "upload", "raycast", "rc_p90",
+        "rc_cpu", "rc_px", "blocks", "used_MB", "pool_MB", "idx_MB", "B/vox", "err_mm", "cover",
+        "triangles", "mesh_s");
+    for (const Result& r : results) {
+      char res[32];
+      std::snprintf(res, sizeof(res), "%dx%d", r.config.width, r.config.height);
+      std::printf(
+          "%-9s %5.0fcm | %8.2f %8.2f %8.2f %8.2f %7.2f | %8.2f %8.2f %8.2f %4d%% | %7d %7.1f "
+          "%7.0f %6.2f %6.2f | %8.2f %5.1f%% %9zu %6.1f\n",
+          res, r.config.voxel_m * 100, r.integrate_ms, r.integrate_p90_ms, r.integrate_cpu_ms,
+          r.alloc_ms, r.upload_ms, r.raycast_ms, r.raycast_p90_ms, r.raycast_cpu_ms,
+          r.raycast_valid_pct, r.blocks, r.pool_used_mb, r.pool_mb, r.index_mb, r.bytes_per_voxel,
+          r.surface_err_mm, 100 * r.surface_coverage, r.mesh_triangles, r.mesh_s);
+      if (r.dropped > 0) {
+        std::printf("  ^ pool exhausted: %lld block allocations dropped\n",
+                    static_cast<long long>(r.dropped));
+      }
+    }
+    std::printf(
+        "\ninteg = allocate + integrate per frame (median wall ms; p90), int_cpu = CPU time of "
+        "all threads for it (median ms;\nan idle 2-core machine needs about half of it as wall "
+        "time), alloc = its allocation part, upload = depth upload;\nraycast per frame from the "
+        "same pose (rc_cpu: CPU time); rc_px = pixels with "
+        "a surface (last frame); B/vox = (used slots + index grid) / allocated voxels;\n"
+        "err_mm = mean distance of ground-truth depth points (every %d-th frame, every 4th "
+        "pixel) to the mesh, over the cover share within 10 cm.\n\n",
+        error_every);
+    for (const Result& r : results) {
+      std::printf(
+          "map_bench res=%dx%d voxel_m=%g integrate_ms=%.2f integrate_p90_ms=%.2f "
+          "raycast_ms=%.2f raycast_p90_ms=%.2f blocks=%d bytes_per_voxel=%.2f pool_mb=%.1f "
+          "surface_err_mm=%.2f\n",
+          r.config.width, r.config.height, r.config.voxel_m, r.integrate_ms, r.integrate_p90_ms,
+          r.raycast_ms, r.raycast_p90_ms, r.blocks, r.bytes_per_voxel, r.pool_used_mb,
+          r.surface_err_mm);
+    }
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "map_bench: %s\n", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,29 @@
+// Trilinear SDF (psi, weight, gradient) and p_fg at N arbitrary points of one volume, through
+// emf_sample_sdf / emf_sample_pfg of voxel_access.clh (the functions the tracking and E-step
+// kernels call per pixel). Points are in the volume frame, metres (float4, .w ignored).
+// Outputs: psi (metres, NaN where any of the 8 neighbours is unallocated or unobserved), weight,
+// gradient (float4, .w = 0) and p_fg (0.5 without counts; 1 for volumes without counts).
+#include "common.clh"
+#include "voxel_access.clh"
+
+#pragma OPENCL FP_CONTRACT OFF
+
+__kernel void sample_sdf_points(__global const int* index, __global const int* count_index,
+                                const int has_counts, const int4 dims,
+                                __global const short2* voxels, const float voxel_size,
+                                const float truncation, __global const float4* points,
+                                const int count, __global float* psi_out,
+                                __global float* weight_out, __global float4* gradient_out,
+                                __global float* pfg_out) {
+  const int i = get_global_id(0);
+  if (i >= count) return;
+  const float3 p = points[i].xyz;
+  float weight = 0.0f;
+  float3 gradient = (float3)(0.0f, 0.0f, 0.0f);
+  const float psi =
+      emf_sample_sdf(index, dims, voxels, voxel_size, truncation, p, &weight, &gradient);
+  psi_out[i] = psi;
+  weight_out[i] = emf_is_valid(psi) ? weight : 0.0f;
+  gradient_out[i] = emf_is_valid(psi) ? (float4)(gradient, 0.0f) : (float4)(NAN, NAN, NAN, 0.0f);
+  pfg_out[i] = has_counts ? emf_sample_pfg(count_index, dims, voxels, voxel_size, p) : 1.0f;
+}

@@ -1,0 +1,273 @@
+// Block allocation and TSDF integration on the device (PoCL) against the CPU references, on
+// analytic scenes and on a real Kinect frame.
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <random>
+
+#include "map_fixture.h"
+
+namespace emf::test {
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+map::MapOptions smallOptions() {
+  map::MapOptions o;
+  o.memory_mb = 32;
+  o.background_voxel_m = 0.02;
+  o.background_resolution = 256;  // 5.12 m at 2 cm
+  return o;
+}
+
+class Integration : public MapTest {};
+
+TEST_F(Integration, AllocationMarksTheTruncationBandAsTheReference) {
+  const map::MapOptions o = smallOptions();
+  map::VoxelPool pool(ctx(), o);
+  const map::VolumeSpec spec = map::VolumeSpec::background(o);
+  const Eigen::Isometry3d T_wc = Eigen::Isometry3d::Identity();
+  map::Volume vol(pool, spec, map::backgroundVolumePose(o, spec, T_wc));
+  const io::Intrinsics k = testIntrinsics(320, 240);
+  const Scene scene;
+  Frame f = makeFrame(renderDepth(scene, k, T_wc), k, T_wc);
+  const map::AllocationReport rep = vol.allocate(f.input);
+  const map::VolumeHostData h = vol.download();
+  const std::vector<uint8_t> marked = map::markBlocksReference(
+      f.depth_host, cameraF(k), map::PoseRows::from(vol.T_world_volume().inverse() * T_wc),
+      static_cast<float>(map::kBlockSize) * spec.voxel_size_m, spec.truncation_m, spec.dims_blocks);
+  int expected = 0;
+  for (size_t i = 0; i < marked.size(); ++i) {
+    expected += marked[i];
+    ASSERT_EQ(h.index[i] >= 0, marked[i] != 0) << "block " << i;
+  }
+  EXPECT_GT(expected, 100);
+  EXPECT_EQ(rep.allocated_blocks, expected);
+  EXPECT_EQ(rep.new_blocks, expected);
+  EXPECT_EQ(rep.listed_blocks, expected);
+  EXPECT_EQ(rep.dropped_blocks, 0);
+  EXPECT_EQ(h.allocatedBlocks(), expected);
+  const map::PoolStats s = pool.stats();
+  EXPECT_EQ(s.used_slots, expected);
+  EXPECT_EQ(s.free_slots, pool.capacitySlots() - expected);
+  // Slots are distinct and were taken from the bottom of the free list: 0 .. expected-1.
+  std::vector<int32_t> slots = h.pool_slots;
+  std::sort(slots.begin(), slots.end());
+  for (int i = 0; i < expected; ++i) ASSERT_EQ(slots[static_cast<size_t>(i)], i);
+
+  // The same frame again allocates nothing new.
+  const map::AllocationReport again = vol.allocate(f.input);
+  EXPECT_EQ(again.new_blocks, 0);
+  EXPECT_EQ(again.allocated_blocks, expected);
+  EXPECT_EQ(again.listed_blocks, expected);
+}
+
+TEST_F(Integration, PlainFusionMatchesReferenceOverSeveralViews) {
+  const map::MapOptions o = smallOptions();
+  map::VoxelPool pool(ctx(), o);
+  const map::VolumeSpec spec = map::VolumeSpec::background(o);
+  const Eigen::Isometry3d T_w0 = Eigen::Isometry3d::Identity();
+  map::Volume vol(pool, spec, map::backgroundVolumePose(o, spec, T_w0));
+  const io::Intrinsics k = testIntrinsics(320, 240);
+  const Scene scene;
+  const Eigen::Isometry3d poses[] = {
+      T_w0, lookAt(Eigen::Vector3d(0.4, -0.1, 0.2), Eigen::Vector3d(0.0, 0.3, 2.0)),
+      lookAt(Eigen::Vector3d(-0.3, 0.1, 0.5), Eigen::Vector3d(0.3, 0.2, 1.6))};
+  for (const auto& T : poses) {
+    Frame f = makeFrame(renderDepth(scene, k, T), k, T);
+    EXPECT_EQ(fuseAndCompare(vol, f), 0);
+  }
+  // Weights: voxels seen in all three views near the sphere front have weight 3.
+  const map::VolumeHostData h = vol.download();
+  const map::VolumeHostView v = h.view();
+  const Eigen::Vector3d front_w = scene.spheres[0].centre_w - Eigen::Vector3d(0, 0, 0.35);
+  const Eigen::Vector3f p = (vol.T_world_volume().inverse() * front_w).cast<float>();
+  float psi = 0, w = 0;
+  Eigen::Vector3f g;
+  ASSERT_TRUE(map::sampleSdfReference(v, p, &psi, &w, &g));
+  EXPECT_NEAR(w, 3.0f, 1e-3f);
+  EXPECT_NEAR(psi, 0.0f, 0.5f * spec.voxel_size_m);
+}
+
+TEST_F(Integration, AssociationWeightsAndFreeSpaceRuleMatchReference) {
+  for (bool full_weight : {true, false}) {
+    SCOPED_TRACE(full_weight ? "free_space_full_weight" : "free space weighted by q");
+    map::MapOptions o = smallOptions();
+    o.free_space_full_weight = full_weight;
+    map::VoxelPool pool(ctx(), o);
+    const map::VolumeSpec spec = map::VolumeSpec::background(o);
+    const Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    map::Volume vol(pool, spec, map::backgroundVolumePose(o, spec, T));
+    const io::Intrinsics k = testIntrinsics(320, 240);
+    const Scene scene;
+    // q: 0 on the left third, a ramp elsewhere.
+    cv::Mat q(k.height, k.width, CV_32FC1);
+    for (int y = 0; y < k.height; ++y) {
+      for (int x = 0; x < k.width; ++x) {
+        q.at<float>(y, x) = x < k.width / 3 ? 0.0f : static_cast<float>(x) / k.width;
+      }
+    }
+    Frame f = makeFrame(renderDepth(scene, k, T), k, T, q);
+    map::VolumeHostData h;
+    EXPECT_EQ(fuseAndCompare(vol, f, &h), 0);
+    // Semantics: in the left third, band voxels stay unobserved; free-space voxels (more than a
+    // truncation in front of the surface) get weight 1 only with the authors' rule.
+    const map::VolumeHostView v = h.view();
+    int band = 0, free_full = 0, free_zero = 0;
+    const map::PoseRows T_cv = map::PoseRows::from(T.inverse() * vol.T_world_volume());
+    for (size_t lin = 0; lin < h.index.size(); ++lin) {
+      if (h.index[lin] < 0) continue;
+      const Eigen::Vector3i base = map::blockCoords(h.dims_blocks, static_cast<int>(lin)) * 8;
+      for (int n = 0; n < map::kBlockVoxels; ++n) {
+        const Eigen::Vector3i vx = base + Eigen::Vector3i(n % 8, (n / 8) % 8, n / 64);
+        const Eigen::Vector3f pc = T_cv.transform(map::voxelCentre(vx, spec.voxel_size_m));
+        int px, py;
+        if (pc.z() <= 0 || !map::projectToPixel(pc, cameraF(k), &px, &py)) continue;
+        if (px >= k.width / 3 - 1) continue;
+        const float sdf = f.depth_host.at<float>(py, px) - pc.z();
+        const map::Voxel& vox = h.voxels[static_cast<size_t>(v.voxelIndex(vx))];
+        if (std::abs(sdf) <= spec.truncation_m) {
+          ++band;
+          EXPECT_EQ(vox.weight_q, 0);
+        } else if (sdf > spec.truncation_m) {
+          (vox.weight_q == 256 ? free_full : free_zero)++;
+        }
+      }
+    }
+    EXPECT_GT(band, 1000);
+    if (full_weight) {
+      EXPECT_GT(free_full, 100);
+      EXPECT_EQ(free_zero, 0);
+    } else {
+      EXPECT_EQ(free_full, 0);
+      EXPECT_GT(free_zero, 100);
+    }
+  }
+}
+
+TEST_F(Integration, WeightCapAndRunningAverage) {
+  map::MapOptions o = smallOptions();
+  o.max_weight = 5;
+  map::VoxelPool pool(ctx(), o);
+  const map::VolumeSpec spec = map::VolumeSpec::background(o);
+  const Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  map::Volume vol(pool, spec, map::backgroundVolumePose(o, spec, T));
+  const io::Intrinsics k = testIntrinsics(160, 120);
+  const Scene scene;
+  Frame f = makeFrame(renderDepth(scene, k, T), k, T);
+  map::VolumeHostData h;
+  for (int i = 0; i < 7; ++i) ASSERT_EQ(fuseAndCompare(vol, f, &h, i == 0), 0) << "frame " << i;
+  int capped = 0;
+  for (const map::Voxel& v : h.voxels) {
+    ASSERT_LE(v.weight_q, 5 * 256);
+    capped += v.weight_q == 5 * 256;
+  }
+  EXPECT_GT(capped, 10000);
+}
+
+TEST_F(Integration, ForegroundCountsFromDetectionMaskMatchReference) {
+  const map::MapOptions o = smallOptions();
+  map::VoxelPool pool(ctx(), o);
+  const Scene scene;
+  const Sphere& s = scene.spheres[1];  // on the floor: the box holds floor too
+  // Object volume of 48 voxels at 2 cm (0.96 m) centred on the sphere.
+  map::VolumeSpec spec = map::VolumeSpec::object(o, 48, 0.02f);
+  Eigen::Isometry3d T_wv = Eigen::Isometry3d::Identity();
+  T_wv.translation() = s.centre_w - Eigen::Vector3d::Constant(0.48);
+  map::Volume vol(pool, spec, T_wv);
+  const io::Intrinsics k = testIntrinsics(320, 240);
+  const Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  const cv::Mat depth = renderDepth(scene, k, T);
+  const cv::Mat sphere_only = renderSpheres(scene, {1}, k, T);
+  // Mask: 1 on the sphere, 0 elsewhere, NaN (occluded, no update) on a vertical strip.
+  cv::Mat mask(k.height, k.width, CV_32FC1);
+  for (int y = 0; y < k.height; ++y) {
+    for (int x = 0; x < k.width; ++x) {
+      const float ds = sphere_only.at<float>(y, x);
+      const bool on_sphere = !std::isnan(ds) && std::abs(ds - depth.at<float>(y, x)) < 1e-4f;
+      mask.at<float>(y, x) = (x >= 100 && x < 104) ? kNaN : (on_sphere ? 1.0f : 0.0f);
+    }
+  }
+  Frame f = makeFrame(depth, k, T, cv::Mat(), mask);
+  map::VolumeHostData h;
+  EXPECT_EQ(fuseAndCompare(vol, f, &h), 0);
+  EXPECT_EQ(fuseAndCompare(vol, f, &h), 0);  // counts accumulate
+  // Every allocated block has its count block; two slots per block.
+  EXPECT_EQ(pool.stats().used_slots, 2 * h.allocatedBlocks());
+  const map::VolumeHostView v = h.view();
+  const Eigen::Vector3f front =
+      (T_wv.inverse() * (s.centre_w - Eigen::Vector3d(0, 0, s.radius_m))).cast<float>();
+  EXPECT_NEAR(map::samplePfgReference(v, front), 1.0f, 1e-6f);
+  // Background behind the sphere's silhouette (wall / floor inside the object box) is 0.
+  int fg = 0, bg = 0;
+  for (int32_t cs : h.count_index) {
+    if (cs < 0) continue;
+    for (int n = 0; n < map::kBlockVoxels; ++n) {
+      const Eigen::Vector2f c =
+          map::counts(h.voxels[static_cast<size_t>(cs) * map::kBlockVoxels + n]);
+      if (c.x() + c.y() == 0) continue;
+      ASSERT_NEAR(c.x() + c.y(), 2.0f, 1e-6f) << "two observations, each Fg + Bg = 1";
+      (c.x() > 0 ? fg : bg)++;
+    }
+  }
+  EXPECT_GT(fg, 500);
+  EXPECT_GT(bg, 500);
+}
+
+TEST_F(Integration, CountsHalveBeforeOverflowKeepingPfg) {
+  map::Voxel c;
+  int halvings = 0;
+  float prev_sum = 0;
+  for (int i = 0; i < 2000; ++i) {  // Fg alone reaches 65535 / 192 after 341 observations
+    c = map::addCounts(c, 0.75f);
+    const Eigen::Vector2f n = map::counts(c);
+    halvings += n.x() + n.y() < prev_sum;
+    prev_sum = n.x() + n.y();
+    ASSERT_NEAR(map::pfgFromCounts(n.x(), n.y()), 0.75f, 2e-3f) << "observation " << i;
+  }
+  EXPECT_GE(halvings, 5);
+  EXPECT_LE(prev_sum, 65535.0f * 2 / map::kCountScale);
+  EXPECT_EQ(map::pfgFromCounts(0, 0), map::kPfgUnknown);
+}
+
+TEST_F(Integration, RealKinectFrameMatchesReferenceAndMeasuredSurface) {
+  const std::string path = dataPath("redkitchen-0-299") + "/depth/000000.png";
+  const cv::Mat raw = cv::imread(path, cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(raw.type(), CV_16UC1) << path;
+  cv::Mat depth;
+  raw.convertTo(depth, CV_32F, 1.0 / 1000.0);
+  depth.setTo(kNaN, raw == 0);
+  cv::Mat small;
+  cv::resize(depth, small, cv::Size(320, 240), 0, 0, cv::INTER_NEAREST);
+  const map::MapOptions o = smallOptions();
+  map::VoxelPool pool(ctx(), o);
+  const map::VolumeSpec spec = map::VolumeSpec::background(o);
+  const Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  map::Volume vol(pool, spec, map::backgroundVolumePose(o, spec, T));
+  const io::Intrinsics k = testIntrinsics(320, 240);
+  Frame f = makeFrame(small, k, T);
+  map::VolumeHostData h;
+  EXPECT_EQ(fuseAndCompare(vol, f, &h), 0);
+  // Measured points lie on the zero level: |psi| at back-projected pixels is small.
+  const map::VolumeHostView v = h.view();
+  int n = 0, close = 0;
+  for (int y = 4; y < k.height; y += 8) {
+    for (int x = 4; x < k.width; x += 8) {
+      const float d = small.at<float>(y, x);
+      if (std::isnan(d)) continue;
+      const Eigen::Vector3d pc((x - k.cx) / k.fx * d, (y - k.cy) / k.fy * d, d);
+      float psi, w;
+      Eigen::Vector3f g;
+      if (!map::sampleSdfReference(v, (vol.T_world_volume().inverse() * pc).cast<float>(), &psi, &w,
+                                   &g)) {
+        continue;
+      }
+      ++n;
+      close += std::abs(psi) < spec.voxel_size_m;
+    }
+  }
+  EXPECT_GT(n, 500);
+  EXPECT_GT(close, 0.9 * n) << close << " of " << n;
+}
+
+}  // namespace
+}  // namespace emf::test

@@ -1,0 +1,222 @@
+// Marching cubes on host volumes filled with analytic / random SDFs: accuracy, orientation,
+// watertightness (ambiguous faces included); PLY binary and ASCII; point-to-mesh distance.
+#include "map/mesh.h"
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+
+#include "common/error.h"
+#include "map/mesh_distance.h"
+#include "test_support.h"
+
+namespace emf::test {
+namespace {
+
+/// A host volume of dims blocks, every block allocated, psi(v) from f(voxel centre, metres).
+template <typename F>
+map::VolumeHostData filledVolume(const Eigen::Vector3i& dims, float voxel, float truncation, F f) {
+  map::VolumeHostData h;
+  h.dims_blocks = dims;
+  h.voxel_size_m = voxel;
+  h.truncation_m = truncation;
+  const int n = dims.prod();
+  h.index.resize(static_cast<size_t>(n));
+  h.voxels.resize(static_cast<size_t>(n) * map::kBlockVoxels);
+  for (int lin = 0; lin < n; ++lin) {
+    h.index[static_cast<size_t>(lin)] = lin;
+    const Eigen::Vector3i base = map::blockCoords(dims, lin) * map::kBlockSize;
+    for (int i = 0; i < map::kBlockVoxels; ++i) {
+      const Eigen::Vector3i v = base + Eigen::Vector3i(i % 8, (i / 8) % 8, i / 64);
+      const Eigen::Vector3f p = (v.cast<float>() + Eigen::Vector3f::Constant(0.5f)) * voxel;
+      h.voxels[static_cast<size_t>(lin) * map::kBlockVoxels + i] =
+          map::Voxel::make(f(p, v) / truncation, 1.0f);
+    }
+  }
+  return h;
+}
+
+/// Each undirected edge is used by exactly two triangles, once in each direction (closed,
+/// consistently oriented surface).
+void expectClosedAndOriented(const map::Mesh& m) {
+  std::map<std::pair<int, int>, int> directed;
+  for (const Eigen::Vector3i& t : m.triangles) {
+    for (int c = 0; c < 3; ++c) directed[{t[c], t[(c + 1) % 3]}]++;
+  }
+  int bad = 0;
+  for (const auto& [e, count] : directed) {
+    const auto rev = directed.find({e.second, e.first});
+    if (count != 1 || rev == directed.end() || rev->second != 1) {
+      if (bad++ < 5) ADD_FAILURE() << "edge " << e.first << "-" << e.second << " used " << count;
+    }
+  }
+  EXPECT_EQ(bad, 0);
+}
+
+TEST(Mesh, SphereIsAccurateClosedAndFacesOutward) {
+  const Eigen::Vector3f c(0.16f, 0.17f, 0.15f);
+  const float r = 0.1f, voxel = 0.01f;
+  const map::VolumeHostData h = filledVolume(
+      Eigen::Vector3i(4, 4, 4), voxel, 0.05f,
+      [&](const Eigen::Vector3f& p, const Eigen::Vector3i&) { return (p - c).norm() - r; });
+  map::MeshOptions opt;
+  opt.world_frame = false;
+  const map::Mesh m = map::extractMesh(h, opt);
+  ASSERT_GT(m.triangles.size(), 1000u);
+  float max_err = 0;
+  for (size_t i = 0; i < m.vertices.size(); ++i) {
+    max_err = std::max(max_err, std::abs((m.vertices[i] - c).norm() - r));
+    EXPECT_GT(m.normals[i].dot((m.vertices[i] - c).normalized()), 0.99f) << i;
+  }
+  // Linear interpolation of the exact SDF along voxel edges: error well below a tenth of a voxel.
+  EXPECT_LT(max_err, 0.05f * voxel);
+  for (const Eigen::Vector3i& t : m.triangles) {
+    const Eigen::Vector3f n =
+        (m.vertices[t[1]] - m.vertices[t[0]]).cross(m.vertices[t[2]] - m.vertices[t[0]]);
+    const Eigen::Vector3f centre = (m.vertices[t[0]] + m.vertices[t[1]] + m.vertices[t[2]]) / 3;
+    if (n.norm() > 1e-12f) {
+      EXPECT_GT(n.dot(centre - c), 0.f) << "triangle faces inward";
+    }
+  }
+  expectClosedAndOriented(m);
+  // Euler characteristic of a sphere: V - E + F = 2.
+  const long v = static_cast<long>(m.vertices.size()), f = static_cast<long>(m.triangles.size());
+  EXPECT_EQ(v - 3 * f / 2 + f, 2);
+}
+
+TEST(Mesh, RandomFieldsWithAmbiguousFacesAreWatertight) {
+  // Random signs inside, positive border: many ambiguous faces and cubes; the surface must be
+  // closed and consistently oriented everywhere.
+  for (int seed = 0; seed < 5; ++seed) {
+    std::mt19937 rng(static_cast<unsigned>(seed));
+    std::uniform_real_distribution<float> u(-1.f, 1.f);
+    const map::VolumeHostData h =
+        filledVolume(Eigen::Vector3i(2, 2, 2), 0.01f, 0.05f,
+                     [&](const Eigen::Vector3f&, const Eigen::Vector3i& v) {
+                       const bool border = (v.array() == 0).any() || (v.array() == 15).any();
+                       return border ? 0.04f : 0.04f * u(rng);
+                     });
+    const map::Mesh m = map::extractMesh(h);
+    ASSERT_GT(m.triangles.size(), 100u);
+    expectClosedAndOriented(m);
+  }
+}
+
+TEST(Mesh, BlockBordersAndUnobservedVoxels) {
+  // A plane crossing block borders; voxels beyond x = 10 unobserved: no cube touching them is
+  // meshed, everything else is.
+  const map::VolumeHostData full =
+      filledVolume(Eigen::Vector3i(3, 3, 3), 0.01f, 0.05f,
+                   [](const Eigen::Vector3f& p, const Eigen::Vector3i&) { return p.z() - 0.123f; });
+  map::VolumeHostData h = full;
+  for (size_t lin = 0; lin < h.index.size(); ++lin) {
+    const Eigen::Vector3i base = map::blockCoords(h.dims_blocks, static_cast<int>(lin)) * 8;
+    for (int i = 0; i < map::kBlockVoxels; ++i) {
+      if (base.x() + i % 8 > 10) h.voxels[lin * map::kBlockVoxels + static_cast<size_t>(i)] = {};
+    }
+  }
+  map::MeshOptions opt;
+  opt.world_frame = false;
+  const map::Mesh m = map::extractMesh(h, opt);
+  // Cubes with lower corner x in [0, 9] (corner x+1 <= 10) and y in [0, 22]: 10 x 23 quads.
+  EXPECT_EQ(m.triangles.size(), 10u * 23u * 2u);
+  for (const auto& p : m.vertices) {
+    EXPECT_NEAR(p.z(), 0.123f, 1e-4f);
+    EXPECT_LE(p.x(), 0.1051f);
+  }
+  const map::Mesh all = map::extractMesh(full, opt);
+  EXPECT_EQ(all.triangles.size(), 23u * 23u * 2u);
+}
+
+TEST(Mesh, PlyBinaryAndAsciiRoundTripAtomically) {
+  const map::VolumeHostData h = filledVolume(
+      Eigen::Vector3i(2, 2, 2), 0.01f, 0.05f, [](const Eigen::Vector3f& p, const Eigen::Vector3i&) {
+        return (p - Eigen::Vector3f(0.08f, 0.08f, 0.08f)).norm() - 0.05f;
+      });
+  map::VolumeHostData moved = h;
+  moved.T_world_volume.translation() = Eigen::Vector3d(1, 2, 3);
+  const map::Mesh m = map::extractMesh(moved);
+  EXPECT_NEAR(m.vertices[0].z(), 3.08f, 0.06f);  // world frame applied
+  const std::string dir = tempDir("ply");
+  for (bool binary : {true, false}) {
+    const std::string path = dir + (binary ? "/m_bin.ply" : "/m_ascii.ply");
+    map::writePly(path, m, binary);
+    std::ifstream in(path);
+    std::string l1, l2;
+    std::getline(in, l1);
+    std::getline(in, l2);
+    EXPECT_EQ(l1, "ply");
+    EXPECT_EQ(l2, binary ? "format binary_little_endian 1.0" : "format ascii 1.0");
+    const map::Mesh r = map::readPly(path);
+    ASSERT_EQ(r.vertices.size(), m.vertices.size());
+    ASSERT_EQ(r.triangles.size(), m.triangles.size());
+    const float tol = binary ? 0.f : 1e-6f;
+    for (size_t i = 0; i < m.vertices.size(); ++i) {
+      ASSERT_LE((r.vertices[i] - m.vertices[i]).cwiseAbs().maxCoeff(), tol);
+      ASSERT_LE((r.normals[i] - m.normals[i]).cwiseAbs().maxCoeff(), tol);
+    }
+    EXPECT_EQ(r.triangles, m.triangles);
+  }
+  // Only the two outputs: no temporary files left behind.
+  int files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    ++files;
+    EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos);
+  }
+  EXPECT_EQ(files, 2);
+  // Unwritable target: IoError naming the file.
+  try {
+    map::writePly(dir + "/no/such/folder/m.ply", m, true);
+    FAIL() << "expected IoError";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("no/such/folder/m.ply"), std::string::npos) << e.what();
+  }
+  // A truncated file is reported, not crashed on.
+  {
+    std::ofstream(dir + "/bad.ply") << "ply\nformat ascii 1.0\nelement vertex 5\n"
+                                       "property float x\nproperty float y\nproperty float z\n"
+                                       "property float nx\nproperty float ny\nproperty float nz\n"
+                                       "element face 0\nend_header\n1 2 3 0 0 1\n";
+  }
+  EXPECT_THROW(map::readPly(dir + "/bad.ply"), IoError);
+}
+
+TEST(MeshDistanceTest, MatchesBruteForce) {
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<float> u(0.f, 0.3f);
+  map::Mesh m;
+  for (int i = 0; i < 300; ++i) {
+    const Eigen::Vector3f a(u(rng), u(rng), u(rng));
+    const Eigen::Vector3f d1 = Eigen::Vector3f::Random() * 0.02f,
+                          d2 = Eigen::Vector3f::Random() * 0.02f;
+    m.vertices.push_back(a);
+    m.vertices.push_back(a + d1);
+    m.vertices.push_back(a + d2);
+    m.triangles.emplace_back(3 * i, 3 * i + 1, 3 * i + 2);
+  }
+  m.normals.assign(m.vertices.size(), Eigen::Vector3f::UnitZ());
+  const map::MeshDistance md(m, 0.02f);
+  for (int i = 0; i < 500; ++i) {
+    const Eigen::Vector3f p(u(rng), u(rng), u(rng));
+    float brute = std::numeric_limits<float>::infinity();
+    for (const auto& t : m.triangles) {
+      brute = std::min(brute, map::pointTriangleDistance(p, m.vertices[t[0]], m.vertices[t[1]],
+                                                         m.vertices[t[2]]));
+    }
+    const float d = md.distance(p, 0.1f);
+    if (brute <= 0.1f) {
+      EXPECT_FLOAT_EQ(d, brute) << i;
+    } else {
+      EXPECT_GT(d, 0.1f);
+    }
+  }
+  // Known distances: above the plane of a right triangle, beyond an edge and a corner.
+  const Eigen::Vector3f a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
+  EXPECT_FLOAT_EQ(map::pointTriangleDistance({0.2f, 0.2f, 0.5f}, a, b, c), 0.5f);
+  EXPECT_FLOAT_EQ(map::pointTriangleDistance({0.5f, -0.3f, 0.4f}, a, b, c), 0.5f);
+  EXPECT_FLOAT_EQ(map::pointTriangleDistance({-0.3f, -0.4f, 0.0f}, a, b, c), 0.5f);
+}
+
+}  // namespace
+}  // namespace emf::test
