@@ -18,6 +18,7 @@ struct Command {
 int cmdInfo(const std::vector<std::string>& args);
 int cmdVersion(const std::vector<std::string>& args);
 int cmdConfig(const std::vector<std::string>& args);
+int cmdSynth(const std::vector<std::string>& args);
 
 
 }  // namespace emf::cli

@@ -19,6 +19,8 @@ const std::vector<Command>& commands() {
        emf::cli::cmdInfo},
       {"version", "print the version", emf::cli::cmdVersion},
       {"config", "list, check or print configuration keys", emf::cli::cmdConfig},
+      {"synth", "render a synthetic dynamic scene into a TUM folder with ground truth",
+       emf::cli::cmdSynth},
   };
   return kCommands;
 }
