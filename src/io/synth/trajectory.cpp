@@ -39,7 +39,8 @@ double smootherstep(double x) {
 }
 
 double Trajectory::warpedTime(double t) const {
-  if (t <= still_until_s) return still_until_s > 0.0 ? 0.0 : t;
+  if (still_until_s <= 0.0) return t;  // moving from the start: no warp
+  if (t <= still_until_s) return 0.0;
   const double dt = t - still_until_s;
   if (ramp_s <= 0.0) return dt;
   if (dt < ramp_s) return dt * dt / (2.0 * ramp_s);

@@ -38,7 +38,7 @@ struct Trajectory {
   std::vector<Sinusoid> rotation_terms;  // rotation vectors (rad), body frame after heading
   std::vector<EasedMove> moves;
   bool face_velocity = false;
-  double still_until_s = 0.0;  // the object is at rest (s = 0) before this time
+  double still_until_s = 0.0;  // > 0: the object is at rest (s = 0) until this time
   double ramp_s = 1.0;         // duration of the uniform acceleration after still_until_s
 
   /// Pose at clip time t (seconds).
