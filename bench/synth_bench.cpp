@@ -5,9 +5,9 @@
 // usage: synth_bench [--frames N] [--width W] [--height H] [--threads N] [--write DIR]
 //                    [preset ...]
 #include <chrono>
-#include <ctime>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <filesystem>
 #include <string>
 #include <vector>

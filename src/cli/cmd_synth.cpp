@@ -21,8 +21,8 @@ namespace {
 namespace fs = std::filesystem;
 
 /// Parses an integer flag value; false (after printing a usage error) when malformed.
-bool parseFlag(const ArgParser& p, const std::string& name, const std::string& text,
-               long long lo, long long hi, long long* value) {
+bool parseFlag(const ArgParser& p, const std::string& name, const std::string& text, long long lo,
+               long long hi, long long* value) {
   char* end = nullptr;
   errno = 0;
   const long long v = std::strtoll(text.c_str(), &end, 10);
@@ -58,12 +58,14 @@ int cmdSynth(const std::vector<std::string>& args) {
   p.option("seed", &seed, "S", "seed of depth/colour noise and detections (default 1)");
   p.option("width", &width, "W", "image width in pixels (default 640)");
   p.option("height", &height, "H", "image height in pixels (default 480)");
-  p.option("det-every", &det_every, "N", "run the simulated detector every N frames (default "
-                                         "30, 0 = never)");
+  p.option("det-every", &det_every, "N",
+           "run the simulated detector every N frames (default "
+           "30, 0 = never)");
   p.option("threads", &threads, "N", "rendering threads (default: all cores)");
   p.flag("no-noise", &no_noise, "exact depth and colour (no sensor noise)");
-  p.flag("force", &force, "write into a non-empty folder (replaces rgb/, depth/, masks/, "
-                          "objects/ there)");
+  p.flag("force", &force,
+         "write into a non-empty folder (replaces rgb/, depth/, masks/, "
+         "objects/ there)");
   if (auto code = p.parse(args)) return *code;
   if (out.empty()) {
     std::fprintf(stderr, "emf synth: --out DIR is required\n\n%s", p.usage().c_str());
@@ -117,7 +119,8 @@ int cmdSynth(const std::vector<std::string>& args) {
     }
     for (const char* sub : {"rgb", "depth", "masks", "objects"}) {
       fs::remove_all(fs::path(out) / sub, ec);
-      if (ec) throw IoError("cannot remove " + (fs::path(out) / sub).string() + ": " + ec.message());
+      if (ec)
+        throw IoError("cannot remove " + (fs::path(out) / sub).string() + ": " + ec.message());
     }
   }
 
@@ -129,10 +132,10 @@ int cmdSynth(const std::vector<std::string>& args) {
                         (o.noise ? "" : " --no-noise");
   io::TumWriterOptions wo;
   wo.readme_about =
-      "Synthetic sequence `" + preset + "` made by emf " + std::to_string(EMF_VERSION_MAJOR) +
-      "." + std::to_string(EMF_VERSION_MINOR) + "." + std::to_string(EMF_VERSION_PATCH) +
-      " with\n\n    " + command + "\n\n" + source.scene().description +
-      "\n\nSeed " + std::to_string(o.seed) +
+      "Synthetic sequence `" + preset + "` made by emf " + std::to_string(EMF_VERSION_MAJOR) + "." +
+      std::to_string(EMF_VERSION_MINOR) + "." + std::to_string(EMF_VERSION_PATCH) +
+      " with\n\n    " + command + "\n\n" + source.scene().description + "\n\nSeed " +
+      std::to_string(o.seed) +
       " drives the sensor and detector simulation only (geometry and motion are the same for "
       "every seed). " +
       (o.noise ? "Depth has Kinect-like noise: axial sigma 0.0012 + 0.0019 (z - 0.4)^2 m "
@@ -147,13 +150,15 @@ int cmdSynth(const std::vector<std::string>& args) {
                  ", ...): masks with perturbed boundaries, about 10 % of visible objects "
                  "missed, occasional false positives, scores in [0.5, 1], shuffled ids."
            : " No detections were simulated.") +
-      "\n\nObject ids: " + [&] {
+      "\n\nObject ids: " +
+      [&] {
         std::string s;
         for (const auto& obj : source.scene().objects) {
           s += (s.empty() ? "" : ", ") + std::to_string(obj.id) + " = " + obj.class_name;
         }
         return s.empty() ? std::string("none (static scene)") : s;
-      }() + ".";
+      }() +
+      ".";
   io::TumWriter writer(out, source.intrinsics(), wo);
 
   const auto t0 = std::chrono::steady_clock::now();
@@ -169,8 +174,7 @@ int cmdSynth(const std::vector<std::string>& args) {
     }
   }
   writer.finish();
-  const double s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("wrote %lld frames of '%s' (%dx%d, seed %llu) to %s in %.1f s (%.1f ms/frame)\n",
               static_cast<long long>(n), preset.c_str(), o.width, o.height,
               static_cast<unsigned long long>(o.seed), out.c_str(), s, 1000.0 * s / n);

@@ -69,8 +69,7 @@ TumWriter::TumWriter(const std::string& dir, const Intrinsics& intrinsics,
     std::error_code ec;
     fs::create_directories(fs::path(dir) / sub, ec);
     if (ec) {
-      throw IoError("cannot create folder " + (fs::path(dir) / sub).string() + ": " +
-                    ec.message());
+      throw IoError("cannot create folder " + (fs::path(dir) / sub).string() + ": " + ec.message());
     }
   }
   rgb_list_ = listHeader("color images");
@@ -133,13 +132,14 @@ void TumWriter::write(const Frame& frame) {
       for (int u = 0; u < frame.instance_ids.cols; ++u) ++counts[row[u]];
     }
   }
-  const double min_pixels = std::max(1.0, std::round(options_.min_visible_fraction *
-                                                     intrinsics_.width * intrinsics_.height));
+  const double min_pixels = std::max(
+      1.0, std::round(options_.min_visible_fraction * intrinsics_.width * intrinsics_.height));
   for (const auto& [id, T_world_object] : frame.T_world_object_gt) {
     object_world_[id] += tumPoseLine(t_depth, T_world_object);
     const bool visible = counts.empty() || (id >= 0 && id < 65536 && counts[id] >= min_pixels);
     if (visible && frame.T_world_camera_gt) {
-      object_camera_[id] += tumPoseLine(t_depth, T_world_object.inverse() * *frame.T_world_camera_gt);
+      object_camera_[id] +=
+          tumPoseLine(t_depth, T_world_object.inverse() * *frame.T_world_camera_gt);
     } else if (!object_camera_.count(id)) {
       object_camera_[id] = "";
     }
@@ -185,13 +185,12 @@ void TumWriter::finish() {
   writeTextAtomic((d / "associations.txt").string(), associations_);
   writeTextAtomic((d / "groundtruth.txt").string(), groundtruth_);
   char calib[256];
-  std::snprintf(calib, sizeof(calib), "%.6f %.6f %.6f %.6f %d %d\n", intrinsics_.fx,
-                intrinsics_.fy, intrinsics_.cx, intrinsics_.cy, intrinsics_.width,
-                intrinsics_.height);
+  std::snprintf(calib, sizeof(calib), "%.6f %.6f %.6f %.6f %d %d\n", intrinsics_.fx, intrinsics_.fy,
+                intrinsics_.cx, intrinsics_.cy, intrinsics_.width, intrinsics_.height);
   writeTextAtomic((d / "calibration.txt").string(), calib);
   for (const auto& [id, lines] : object_world_) {
-    const std::string header = "# object " + std::to_string(id) +
-                               ": T_world_object\n# timestamp tx ty tz qx qy qz qw\n";
+    const std::string header =
+        "# object " + std::to_string(id) + ": T_world_object\n# timestamp tx ty tz qx qy qz qw\n";
     writeTextAtomic((d / "objects" / ("gt-object-" + std::to_string(id) + "-world.txt")).string(),
                     header + lines);
   }
@@ -199,9 +198,8 @@ void TumWriter::finish() {
     const std::string header = "# object " + std::to_string(id) +
                                ": T_object_camera (camera pose in the object's frame), frames "
                                "where the object is visible\n# timestamp tx ty tz qx qy qz qw\n";
-    writeTextAtomic(
-        (d / "objects" / ("gt-object-" + std::to_string(id) + "-camera.txt")).string(),
-        header + lines);
+    writeTextAtomic((d / "objects" / ("gt-object-" + std::to_string(id) + "-camera.txt")).string(),
+                    header + lines);
   }
   if (unrepresentable_depth_ > 0) {
     logWarning("TUM writer for ", dir_, ": ", unrepresentable_depth_,
@@ -213,13 +211,13 @@ void TumWriter::finish() {
                 options_.min_visible_fraction * 100.0);
   std::string readme = "# RGB-D sequence (TUM RGB-D folder layout)\n\n";
   if (!options_.readme_about.empty()) readme += options_.readme_about + "\n\n";
-  readme += "Frames: " + std::to_string(frames_) + ", " + std::to_string(intrinsics_.width) +
-            "x" + std::to_string(intrinsics_.height) + ".\n\n";
+  readme += "Frames: " + std::to_string(frames_) + ", " + std::to_string(intrinsics_.width) + "x" +
+            std::to_string(intrinsics_.height) + ".\n\n";
   readme +=
       "## Files\n\n"
       "- `rgb/<t>.png`: colour, 8-bit 3-channel PNG.\n"
-      "- `depth/<t>.png`: depth, 16-bit PNG, " + std::string(scale) +
-      " units per metre (value / " + scale +
+      "- `depth/<t>.png`: depth, 16-bit PNG, " +
+      std::string(scale) + " units per metre (value / " + scale +
       " = metres along the optical axis), 0 = no measurement.\n"
       "- `rgb.txt`, `depth.txt`: `timestamp filename` per frame (3 comment lines first).\n"
       "- `associations.txt`: `t_rgb rgb/<t>.png t_depth depth/<t>.png` per frame.\n"
@@ -230,7 +228,8 @@ void TumWriter::finish() {
       "- `objects/gt-object-<k>-world.txt`: object k's pose T_world_object per frame.\n"
       "- `objects/gt-object-<k>-camera.txt`: the camera pose in object k's frame, "
       "T_object_camera, only for frames where the object is visible (at least " +
-      std::string(visible_percent) + " % of the image). Evaluate object trajectories against this file: ATE with Horn "
+      std::string(visible_percent) +
+      " % of the image). Evaluate object trajectories against this file: ATE with Horn "
       "alignment is then independent of where the object's origin lies.\n"
       "- `masks/<t>.png` and `masks/<t>.txt`: detections on the frames where the detector ran. "
       "The PNG is 16-bit, of the depth image's size, pixel = detection id 1..n (0 = none; "

@@ -1,11 +1,11 @@
 // Depth noise model: statistics on fronto-parallel planes against the model's sigma (axial part
 // alone, and with disparity quantisation against expectedStd), range limits, dropouts,
 // discontinuity effects and the projector shadow, determinism per seed.
+#include "io/synth/depth_noise.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
-
-#include "io/synth/depth_noise.h"
 
 namespace emf::io::synth {
 namespace {
@@ -127,7 +127,7 @@ TEST(SynthDepthNoise, DiscontinuitiesAndProjectorShadow) {
     int w = 0;
     for (int u = 149; u >= 0 && std::isnan(noisy.at<float>(v, u)); --u) ++w;
     shadow_width_sum += w;
-    EXPECT_TRUE(std::isnan(noisy.at<float>(v, 140)));  // well inside the band
+    EXPECT_TRUE(std::isnan(noisy.at<float>(v, 140)));   // well inside the band
     EXPECT_FALSE(std::isnan(noisy.at<float>(v, 100)));  // well outside it
     // The block's right edge (column 249) borders the wall at 2 m (column 250, not shadowed).
     for (int u : {249, 250}) {

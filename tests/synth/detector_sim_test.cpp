@@ -1,12 +1,12 @@
 // Simulated detector: miss rate, false positives, shuffled ids, mask quality (IoU with the
 // ground-truth instance masks), scores, boxes, determinism.
+#include "io/synth/detector_sim.h"
+
 #include <gtest/gtest.h>
 
 #include <map>
 #include <opencv2/imgproc.hpp>
 #include <set>
-
-#include "io/synth/detector_sim.h"
 
 namespace emf::io::synth {
 namespace {

@@ -1,12 +1,13 @@
 // Presets: every preset renders; camera motion is hand-held-like (speed and rotation per frame
 // bounded); objects are visible for long stretches; each preset's documented events happen.
+#include "io/synth/presets.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 
 #include "common/error.h"
-#include "io/synth/presets.h"
 #include "io/synth/synth_source.h"
 
 namespace emf::io::synth {
@@ -126,13 +127,13 @@ TEST(SynthPresets, OcclusionEventsHappenAsDocumented) {
     const auto a = o.trajectory.pose(s.timeOf(f0)), b = o.trajectory.pose(s.timeOf(f1));
     return translationBetween(a, b) + rotationDegBetween(a, b) / kRadToDeg;
   };
-  EXPECT_GT(moved(bear, 0, 30), 0.05);    // flies from the start
-  EXPECT_EQ(moved(bag, 0, 59), 0.0);      // still before 2 s
-  EXPECT_GT(moved(bag, 60, 150), 1.0);    // slides in
-  EXPECT_EQ(moved(bag, 150, 270), 0.0);   // waits in front of the chair
-  EXPECT_GT(moved(bag, 270, 360), 1.0);   // slides out
-  EXPECT_EQ(moved(chair, 0, 390), 0.0);   // still until 13 s
-  EXPECT_GT(moved(chair, 390, 450), 0.1); // then moves
+  EXPECT_GT(moved(bear, 0, 30), 0.05);     // flies from the start
+  EXPECT_EQ(moved(bag, 0, 59), 0.0);       // still before 2 s
+  EXPECT_GT(moved(bag, 60, 150), 1.0);     // slides in
+  EXPECT_EQ(moved(bag, 150, 270), 0.0);    // waits in front of the chair
+  EXPECT_GT(moved(bag, 270, 360), 1.0);    // slides out
+  EXPECT_EQ(moved(chair, 0, 390), 0.0);    // still until 13 s
+  EXPECT_GT(moved(chair, 390, 450), 0.1);  // then moves
   EXPECT_GT(moved(chair, 450, 599), 0.1);
 
   int min_pixels = 0;

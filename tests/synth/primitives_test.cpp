@@ -1,11 +1,12 @@
 // Primitives: signed distances at known points, closed-form ray intersections against an
 // independent sphere tracer on the signed distance, normals against the SDF gradient.
+#include "io/synth/primitives.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
 
-#include "io/synth/primitives.h"
 #include "io/synth/rng.h"
 
 namespace emf::io::synth {
@@ -87,7 +88,8 @@ TEST(SynthPrimitives, ClosedFormIntersectionsMatchSphereTracing) {
       // Rays grazing a silhouette can disagree; the reference must then pass within 1e-4 m.
       if (hit != hit_ref) {
         double closest = std::numeric_limits<double>::infinity();
-        for (double s = 0; s < 4.0; s += 1e-4) closest = std::min(closest, signedDistance(g, o + s * d));
+        for (double s = 0; s < 4.0; s += 1e-4)
+          closest = std::min(closest, signedDistance(g, o + s * d));
         EXPECT_LT(closest, 1e-4) << "shape " << static_cast<int>(g.shape) << " ray " << i;
         continue;
       }
@@ -121,18 +123,20 @@ TEST(SynthPrimitives, RoomIsSeenFromInside) {
 TEST(SynthPrimitives, RaysStartingInsideSolidsMiss) {
   double t = 0;
   EXPECT_FALSE(intersectRay(geometry(Shape::kBox, {1, 1, 1}, 0), {0, 0, 0}, {1, 0, 0}, 1e-6, &t));
-  EXPECT_FALSE(intersectRay(geometry(Shape::kSphere, {1, 1, 1}, 1), {0, 0, 0}, {1, 0, 0}, 1e-6, &t));
-  EXPECT_FALSE(intersectRay(geometry(Shape::kCapsule, {0, 0, 1}, 0.5), {0, 0, 1.2}, {1, 0, 0},
-                            1e-6, &t));
-  EXPECT_FALSE(intersectRay(geometry(Shape::kRoundedBox, {1, 1, 1}, 0.2), {0, 0, 0}, {1, 0, 0},
-                            1e-6, &t));
+  EXPECT_FALSE(
+      intersectRay(geometry(Shape::kSphere, {1, 1, 1}, 1), {0, 0, 0}, {1, 0, 0}, 1e-6, &t));
+  EXPECT_FALSE(
+      intersectRay(geometry(Shape::kCapsule, {0, 0, 1}, 0.5), {0, 0, 1.2}, {1, 0, 0}, 1e-6, &t));
+  EXPECT_FALSE(
+      intersectRay(geometry(Shape::kRoundedBox, {1, 1, 1}, 0.2), {0, 0, 0}, {1, 0, 0}, 1e-6, &t));
 }
 
 TEST(SynthPrimitives, NormalsFollowTheSdfGradient) {
-  const PrimitiveGeometry shapes[] = {
-      geometry(Shape::kBox, {0.3, 0.2, 0.5}, 0), geometry(Shape::kRoundedBox, {0.3, 0.2, 0.5}, 0.08),
-      geometry(Shape::kSphere, {0.4, 0.4, 0.4}, 0.4), geometry(Shape::kCylinder, {0, 0, 0.3}, 0.25),
-      geometry(Shape::kCapsule, {0, 0, 0.3}, 0.2)};
+  const PrimitiveGeometry shapes[] = {geometry(Shape::kBox, {0.3, 0.2, 0.5}, 0),
+                                      geometry(Shape::kRoundedBox, {0.3, 0.2, 0.5}, 0.08),
+                                      geometry(Shape::kSphere, {0.4, 0.4, 0.4}, 0.4),
+                                      geometry(Shape::kCylinder, {0, 0, 0.3}, 0.25),
+                                      geometry(Shape::kCapsule, {0, 0, 0.3}, 0.2)};
   Rng rng(3);
   for (const auto& g : shapes) {
     for (int i = 0; i < 200; ++i) {
@@ -141,9 +145,10 @@ TEST(SynthPrimitives, NormalsFollowTheSdfGradient) {
       if (!intersectRay(g, o, -1.0 * o, 1e-6, &t)) continue;  // aimed at the centre: hits
       const V3 p = o + t * (-1.0 * o);
       const double e = 1e-6;
-      const V3 grad = normalized(V3{signedDistance(g, p + V3{e, 0, 0}) - signedDistance(g, p - V3{e, 0, 0}),
-                                    signedDistance(g, p + V3{0, e, 0}) - signedDistance(g, p - V3{0, e, 0}),
-                                    signedDistance(g, p + V3{0, 0, e}) - signedDistance(g, p - V3{0, 0, e})});
+      const V3 grad =
+          normalized(V3{signedDistance(g, p + V3{e, 0, 0}) - signedDistance(g, p - V3{e, 0, 0}),
+                        signedDistance(g, p + V3{0, e, 0}) - signedDistance(g, p - V3{0, e, 0}),
+                        signedDistance(g, p + V3{0, 0, e}) - signedDistance(g, p - V3{0, 0, e})});
       const V3 n = surfaceNormal(g, p);
       // On box edges the gradient is ambiguous; skip points within 1e-4 of two faces.
       if (g.shape == Shape::kBox) {

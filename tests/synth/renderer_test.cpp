@@ -1,11 +1,12 @@
 // Renderer: exact depth and instance ids of known geometry (noise off) against analytic
 // references computed independently here, the lighting model on a known face, intrinsics.
+#include "io/synth/renderer.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "common/error.h"
-#include "io/synth/renderer.h"
 
 namespace emf::io::synth {
 namespace {
@@ -98,8 +99,8 @@ TEST(SynthRenderer, WallAndRotatedBoxMatchAnalyticDepthAndIds) {
       const Eigen::Vector3d ray_w = T_world_camera.linear() * ray_c;
       const double t_wall = (3.0 - T_world_camera.translation().y()) / ray_w.y();
       bool ambiguous = false;
-      const double t_box = boxReference(T_box_camera.translation(),
-                                        T_box_camera.linear() * ray_c, h, &ambiguous);
+      const double t_box =
+          boxReference(T_box_camera.translation(), T_box_camera.linear() * ray_c, h, &ambiguous);
       if (ambiguous) continue;
       ++checked;
       const float depth = out.depth.at<float>(v, u);
@@ -141,7 +142,8 @@ TEST(SynthRenderer, FloorSeenFromAPitchedCameraMatchesPlaneDepth) {
       const float depth = out.depth.at<float>(v, u);
       if (ray_w.z() < -1e-9) {
         ++hits;
-        EXPECT_NEAR(depth, -1.2 / ray_w.z(), kDepthToleranceM * (-1.2 / ray_w.z())) << u << "," << v;
+        EXPECT_NEAR(depth, -1.2 / ray_w.z(), kDepthToleranceM * (-1.2 / ray_w.z()))
+            << u << "," << v;
       } else {
         ++misses;
         EXPECT_TRUE(std::isnan(depth)) << u << "," << v;

@@ -39,7 +39,8 @@ TEST(CliSynth, WritesATumFolder) {
   EXPECT_TRUE(fs::exists(out + "/masks/0.066667.png"));
   EXPECT_FALSE(fs::exists(out + "/masks/0.033333.png"));
   std::ifstream readme(out + "/README.md");
-  const std::string text((std::istreambuf_iterator<char>(readme)), std::istreambuf_iterator<char>());
+  const std::string text((std::istreambuf_iterator<char>(readme)),
+                         std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("emf synth cars --frames 4 --seed 9 --width 64 --height 48 --det-every 2"),
             std::string::npos)
       << text;
@@ -47,8 +48,8 @@ TEST(CliSynth, WritesATumFolder) {
   EXPECT_NE(text.find("1 = car, 2 = car"), std::string::npos);
 
   // A non-empty folder is refused, then replaced with --force.
-  EXPECT_EQ(test::runCommand(cli() + " synth room --out " + out + " --frames 2 --width 32 --height 24",
-                             &log),
+  EXPECT_EQ(test::runCommand(
+                cli() + " synth room --out " + out + " --frames 2 --width 32 --height 24", &log),
             1);
   EXPECT_NE(log.find("is not empty"), std::string::npos) << log;
   EXPECT_NE(log.find("--force"), std::string::npos) << log;
@@ -59,7 +60,7 @@ TEST(CliSynth, WritesATumFolder) {
       << log;
   EXPECT_EQ(countLines(out + "/rgb.txt"), 2);
   EXPECT_FALSE(fs::exists(out + "/objects/gt-object-1-world.txt"));  // room has no objects
-  EXPECT_FALSE(fs::exists(out + "/depth/0.100000.png"));            // old frames are gone
+  EXPECT_FALSE(fs::exists(out + "/depth/0.100000.png"));             // old frames are gone
 }
 
 TEST(CliSynth, UsageErrors) {

@@ -1,13 +1,14 @@
 // The synth: source: query parsing and errors, determinism per seed, frame contents, and the
 // consistency of depth, instance ids and ground-truth poses (points on an object's pixels lie
 // on that object's surface).
+#include "io/synth/synth_source.h"
+
 #include <gtest/gtest.h>
 
 #include <cstring>
 
 #include "common/error.h"
 #include "io/synth/presets.h"
-#include "io/synth/synth_source.h"
 
 namespace emf::io::synth {
 namespace {
@@ -31,8 +32,13 @@ bool sameBytes(const cv::Mat& a, const cv::Mat& b) {
 }
 
 TEST(SynthSource, QueryParametersAndErrors) {
-  auto src = openSynthSource("cars", {{"frames", "7"}, {"seed", "3"}, {"width", "80"},
-                                      {"height", "60"}, {"det_every", "2"}, {"noise", "0"}},
+  auto src = openSynthSource("cars",
+                             {{"frames", "7"},
+                              {"seed", "3"},
+                              {"width", "80"},
+                              {"height", "60"},
+                              {"det_every", "2"},
+                              {"noise", "0"}},
                              {});
   EXPECT_EQ(src->size(), 7);
   EXPECT_EQ(src->intrinsics().width, 80);
@@ -163,10 +169,11 @@ TEST(SynthSource, DepthIdsAndPosesAreConsistent) {
             double best = 1e9;
             for (const auto& part : obj.parts) {
               const Eigen::Vector3d q = part.T_parent_primitive.inverse() * p_o;
-              best = std::min(best, std::fabs(signedDistance(part.geometry, {q.x(), q.y(), q.z()})));
+              best =
+                  std::min(best, std::fabs(signedDistance(part.geometry, {q.x(), q.y(), q.z()})));
             }
-            EXPECT_LT(best, kSurfaceToleranceM) << preset << " frame " << index << " px " << u
-                                                << "," << v;
+            EXPECT_LT(best, kSurfaceToleranceM)
+                << preset << " frame " << index << " px " << u << "," << v;
             ++checked;
           }
         }

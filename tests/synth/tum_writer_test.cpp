@@ -1,6 +1,8 @@
 // TUM writer and atomic files: every file of a written synthetic sequence read back and compared
 // with the frames (depth quantised at 1/5000 m, colour exact, poses to 1e-6, masks and their
 // text), visibility-filtered object trajectories, errors naming the file/frame.
+#include "io/tum_writer.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -11,7 +13,6 @@
 #include "common/error.h"
 #include "io/atomic_file.h"
 #include "io/synth/synth_source.h"
-#include "io/tum_writer.h"
 #include "test_support.h"
 
 namespace emf::io {
@@ -46,7 +47,8 @@ std::pair<std::string, Eigen::Isometry3d> parsePose(const std::string& line) {
   return {t, T};
 }
 
-void expectPoseNear(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, const std::string& what) {
+void expectPoseNear(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b,
+                    const std::string& what) {
   EXPECT_LT((a.translation() - b.translation()).cwiseAbs().maxCoeff(), kPoseTolerance) << what;
   EXPECT_LT((a.linear() - b.linear()).cwiseAbs().maxCoeff(), 2 * kPoseTolerance) << what;
 }
@@ -99,7 +101,8 @@ TEST(TumWriter, WritesEveryFileWithTheFramesContent) {
     for (int v = 0; v < d16.rows; ++v) {
       for (int u = 0; u < d16.cols; ++u) {
         const float z = f.depth.at<float>(v, u);
-        const uint16_t expected = std::isnan(z) ? 0 : static_cast<uint16_t>(std::lround(z * 5000.0));
+        const uint16_t expected =
+            std::isnan(z) ? 0 : static_cast<uint16_t>(std::lround(z * 5000.0));
         invalid += expected == 0;
         ASSERT_EQ(d16.at<uint16_t>(v, u), expected) << t << " " << u << "," << v;
       }
@@ -139,7 +142,8 @@ TEST(TumWriter, WritesEveryFileWithTheFramesContent) {
       EXPECT_EQ(cv::countNonZero(mine & (d.mask < 0.5f)), 0);
       bool top = true;
       for (const auto& other : *f.detections) {
-        if (other.id != d.id && other.score > d.score) top = top && cv::countNonZero((other.mask >= 0.5f) & (d.mask >= 0.5f)) == 0;
+        if (other.id != d.id && other.score > d.score)
+          top = top && cv::countNonZero((other.mask >= 0.5f) & (d.mask >= 0.5f)) == 0;
       }
       if (top) {
         EXPECT_EQ(cv::countNonZero(mine), cv::countNonZero(d.mask >= 0.5f));
@@ -211,7 +215,8 @@ TEST(TumWriter, RejectsBadFramesNamingThem) {
     writer.write(f);
     FAIL();
   } catch (const IoError& e) {
-    EXPECT_NE(std::string(e.what()).find("frame 7 (t=0.233333) has no CV_32F depth"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("frame 7 (t=0.233333) has no CV_32F depth"),
+              std::string::npos)
         << e.what();
   }
   f.depth = cv::Mat(20, 32, CV_32F, cv::Scalar(1.0));
@@ -242,7 +247,8 @@ TEST(AtomicFile, ReplacesContentAndNamesUnwritablePaths) {
     writeTextAtomic(dir + "/missing/b.txt", "x");
     FAIL();
   } catch (const IoError& e) {
-    EXPECT_NE(std::string(e.what()).find("cannot write " + dir + "/missing/b.txt"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("cannot write " + dir + "/missing/b.txt"),
+              std::string::npos)
         << e.what();
   }
   EXPECT_THROW(writeImageAtomic(dir + "/noext", cv::Mat(2, 2, CV_8U)), IoError);

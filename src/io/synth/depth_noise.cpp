@@ -56,8 +56,7 @@ double DepthNoiseModel::expectedStd(double z) const {
 }
 
 void DepthNoiseModel::apply(const cv::Mat& depth, const cv::Mat& cos_incidence, double fx_px,
-                            uint64_t seed, int64_t frame_index, cv::Mat* out,
-                            int threads) const {
+                            uint64_t seed, int64_t frame_index, cv::Mat* out, int threads) const {
   CV_Assert(depth.type() == CV_32F);
   CV_Assert(cos_incidence.empty() ||
             (cos_incidence.type() == CV_32F && cos_incidence.size() == depth.size()));
@@ -127,8 +126,8 @@ void DepthNoiseModel::apply(const cv::Mat& depth, const cv::Mat& cos_incidence, 
         if (o.quantize && z > 0.0) {
           // Disparity in steps (positive): rounding by truncation of x + 0.5 avoids a libm call.
           const double steps = fb_quant / z * inv_step;
-          const double dq = static_cast<double>(static_cast<int64_t>(steps + 0.5)) *
-                            o.disparity_step_px;
+          const double dq =
+              static_cast<double>(static_cast<int64_t>(steps + 0.5)) * o.disparity_step_px;
           if (dq <= 0.0) continue;
           z = fb_quant / dq;
         }

@@ -33,8 +33,8 @@ struct DetectorSimOptions {
   double true_score_min = 0.7;
   double false_score_max = 0.75;
   /// Classes false positives are drawn from.
-  std::vector<std::string> false_positive_classes{"chair", "cup", "bottle", "book",
-                                                  "potted plant", "tv"};
+  std::vector<std::string> false_positive_classes{"chair", "cup",          "bottle",
+                                                  "book",  "potted plant", "tv"};
 };
 
 /// Detections for one frame from its instance-id image (CV_16U, 0 = background).

@@ -23,50 +23,50 @@ Eigen::Vector3d v3(double x, double y, double z) { return {x, y, z}; }
 // ---- static furniture (world frame) ---------------------------------------------------------
 
 void addRoom(Scene& s, V3 half_extents_m, double centre_y) {
-  const Material floor = pattern(Texture::kTiles, {0.22f, 0.38f, 0.55f}, {0.42f, 0.60f, 0.78f},
-                                 0.4);
-  const Material walls = pattern(Texture::kNoise, {0.80f, 0.85f, 0.88f}, {0.55f, 0.66f, 0.74f},
-                                 0.3);
+  const Material floor =
+      pattern(Texture::kTiles, {0.22f, 0.38f, 0.55f}, {0.42f, 0.60f, 0.78f}, 0.4);
+  const Material walls =
+      pattern(Texture::kNoise, {0.80f, 0.85f, 0.88f}, {0.55f, 0.66f, 0.74f}, 0.3);
   s.statics.push_back(makePlane(at(0, 0, 0), floor));
   // The room box reaches below the floor plane so the floor is the plane, not the box bottom.
   s.statics.push_back(makeRoom(half_extents_m, at(0, centre_y, half_extents_m.z - 0.2), walls));
   // A picture and a door on the walls give the background colour and depth structure.
   const double back_y = centre_y + half_extents_m.y;
-  s.statics.push_back(makeBox({0.5, 0.015, 0.35}, at(0.3, back_y - 0.015, 1.5),
-                              pattern(Texture::kChecker, {0.15f, 0.3f, 0.85f},
-                                      {0.8f, 0.65f, 0.2f}, 0.1)));
-  s.statics.push_back(makeBox({0.02, 0.45, 1.0}, at(-half_extents_m.x + 0.02, centre_y + 0.4, 1.0),
-                              pattern(Texture::kStripes, {0.35f, 0.45f, 0.5f},
-                                      {0.25f, 0.32f, 0.38f}, 0.03)));
+  s.statics.push_back(
+      makeBox({0.5, 0.015, 0.35}, at(0.3, back_y - 0.015, 1.5),
+              pattern(Texture::kChecker, {0.15f, 0.3f, 0.85f}, {0.8f, 0.65f, 0.2f}, 0.1)));
+  s.statics.push_back(
+      makeBox({0.02, 0.45, 1.0}, at(-half_extents_m.x + 0.02, centre_y + 0.4, 1.0),
+              pattern(Texture::kStripes, {0.35f, 0.45f, 0.5f}, {0.25f, 0.32f, 0.38f}, 0.03)));
 }
 
 void addTable(Scene& s, double x, double y, double yaw, double half_x, double half_y) {
   const Eigen::Isometry3d T = at(x, y, 0, yaw);
-  const Material wood = pattern(Texture::kStripes, {0.18f, 0.33f, 0.52f}, {0.28f, 0.45f, 0.66f},
-                                0.05);
+  const Material wood =
+      pattern(Texture::kStripes, {0.18f, 0.33f, 0.52f}, {0.28f, 0.45f, 0.66f}, 0.05);
   const Material metal = solid(0.25f, 0.25f, 0.27f);
   s.statics.push_back(makeBox({half_x, half_y, 0.02}, T * at(0, 0, 0.74), wood));
   for (int sx : {-1, 1}) {
     for (int sy : {-1, 1}) {
       s.statics.push_back(makeBox({0.025, 0.025, 0.36},
-                                  T * at(sx * (half_x - 0.06), sy * (half_y - 0.06), 0.36),
-                                  metal));
+                                  T * at(sx * (half_x - 0.06), sy * (half_y - 0.06), 0.36), metal));
     }
   }
 }
 
 void addShelf(Scene& s, double x, double y, double yaw) {
   const Eigen::Isometry3d T = at(x, y, 0, yaw);
-  s.statics.push_back(makeBox({0.4, 0.18, 0.9}, T * at(0, 0, 0.9),
-                              pattern(Texture::kStripes, {0.2f, 0.25f, 0.6f},
-                                      {0.6f, 0.5f, 0.2f}, 0.07)));
+  s.statics.push_back(
+      makeBox({0.4, 0.18, 0.9}, T * at(0, 0, 0.9),
+              pattern(Texture::kStripes, {0.2f, 0.25f, 0.6f}, {0.6f, 0.5f, 0.2f}, 0.07)));
 }
 
 std::vector<Primitive> chairParts(const Material& seat, const Material& legs) {
   std::vector<Primitive> p;
   p.push_back(makeBox({0.22, 0.22, 0.025}, at(0, 0, 0.45), seat));
   for (int sx : {-1, 1}) {
-    for (int sy : {-1, 1}) p.push_back(makeCylinder(0.02, 0.215, at(sx * 0.19, sy * 0.19, 0.215), legs));
+    for (int sy : {-1, 1})
+      p.push_back(makeCylinder(0.02, 0.215, at(sx * 0.19, sy * 0.19, 0.215), legs));
   }
   p.push_back(makeBox({0.22, 0.02, 0.25}, at(0, 0.2, 0.72), seat));
   return p;
@@ -74,9 +74,9 @@ std::vector<Primitive> chairParts(const Material& seat, const Material& legs) {
 
 void addChair(Scene& s, double x, double y, double yaw) {
   const Eigen::Isometry3d T = at(x, y, 0, yaw);
-  for (auto& part : chairParts(pattern(Texture::kChecker, {0.3f, 0.55f, 0.3f},
-                                       {0.2f, 0.4f, 0.2f}, 0.08),
-                               solid(0.2f, 0.2f, 0.2f))) {
+  for (auto& part :
+       chairParts(pattern(Texture::kChecker, {0.3f, 0.55f, 0.3f}, {0.2f, 0.4f, 0.2f}, 0.08),
+                  solid(0.2f, 0.2f, 0.2f))) {
     part.T_parent_primitive = T * part.T_parent_primitive;
     s.statics.push_back(part);
   }
@@ -100,14 +100,14 @@ void addLamp(Scene& s, double x, double y) {
 
 void addTableItems(Scene& s, double x, double y) {
   const double top = 0.76;
-  s.statics.push_back(makeSphere(0.1, at(x + 0.3, y - 0.1, top + 0.1),
-                                 pattern(Texture::kChecker, {0.1f, 0.1f, 0.8f},
-                                         {0.9f, 0.9f, 0.9f}, 0.05)));
-  s.statics.push_back(makeCylinder(0.06, 0.12, at(x - 0.3, y + 0.1, top + 0.12),
-                                   pattern(Texture::kStripes, {0.7f, 0.4f, 0.1f},
-                                           {0.9f, 0.8f, 0.5f}, 0.04)));
-  s.statics.push_back(makeCapsule(0.035, 0.08, at(x, y + 0.15, top + 0.115),
-                                  solid(0.2f, 0.6f, 0.25f)));
+  s.statics.push_back(
+      makeSphere(0.1, at(x + 0.3, y - 0.1, top + 0.1),
+                 pattern(Texture::kChecker, {0.1f, 0.1f, 0.8f}, {0.9f, 0.9f, 0.9f}, 0.05)));
+  s.statics.push_back(
+      makeCylinder(0.06, 0.12, at(x - 0.3, y + 0.1, top + 0.12),
+                   pattern(Texture::kStripes, {0.7f, 0.4f, 0.1f}, {0.9f, 0.8f, 0.5f}, 0.04)));
+  s.statics.push_back(
+      makeCapsule(0.035, 0.08, at(x, y + 0.15, top + 0.115), solid(0.2f, 0.6f, 0.25f)));
 }
 
 // ---- objects (object frame: x forward, z up, origin on the floor unless noted) ---------------
@@ -122,8 +122,8 @@ SceneObject car(int id, const Material& body, const Material& cabin) {
   for (int sx : {-1, 1}) {
     for (int sy : {-1, 1}) {
       // Cylinder axis (local z) along the car's y axis.
-      o.parts.push_back(makeCylinder(0.035, 0.015, at(sx * 0.11, sy * 0.085, 0.035, 0, 0, kPi / 2),
-                                     tyre));
+      o.parts.push_back(
+          makeCylinder(0.035, 0.015, at(sx * 0.11, sy * 0.085, 0.035, 0, 0, kPi / 2), tyre));
     }
   }
   return o;
@@ -151,9 +151,9 @@ SceneObject suitcase(int id) {
   SceneObject o;
   o.id = id;
   o.class_name = "suitcase";
-  o.parts.push_back(makeRoundedBox({0.3, 0.12, 0.4}, 0.04, at(0, 0, 0.4),
-                                   pattern(Texture::kChecker, {0.55f, 0.25f, 0.1f},
-                                           {0.75f, 0.45f, 0.2f}, 0.12)));
+  o.parts.push_back(
+      makeRoundedBox({0.3, 0.12, 0.4}, 0.04, at(0, 0, 0.4),
+                     pattern(Texture::kChecker, {0.55f, 0.25f, 0.1f}, {0.75f, 0.45f, 0.2f}, 0.12)));
   const Material black = solid(0.1f, 0.1f, 0.1f);
   o.parts.push_back(makeCapsule(0.015, 0.1, at(0, 0, 0.88, 0, kPi / 2, 0), black));
   for (int sx : {-1, 1}) o.parts.push_back(makeCylinder(0.012, 0.04, at(sx * 0.1, 0, 0.84), black));
@@ -173,9 +173,10 @@ SceneObject couch(int id) {
   SceneObject o;
   o.id = id;
   o.class_name = "couch";
-  const Material fabric = pattern(Texture::kNoise, {0.3f, 0.55f, 0.25f}, {0.2f, 0.35f, 0.12f}, 0.08);
-  const Material cushion = pattern(Texture::kChecker, {0.35f, 0.6f, 0.3f}, {0.25f, 0.45f, 0.2f},
-                                   0.15);
+  const Material fabric =
+      pattern(Texture::kNoise, {0.3f, 0.55f, 0.25f}, {0.2f, 0.35f, 0.12f}, 0.08);
+  const Material cushion =
+      pattern(Texture::kChecker, {0.35f, 0.6f, 0.3f}, {0.25f, 0.45f, 0.2f}, 0.15);
   o.parts.push_back(makeRoundedBox({0.9, 0.4, 0.2}, 0.06, at(0, 0, 0.2), fabric));
   o.parts.push_back(makeRoundedBox({0.7, 0.3, 0.06}, 0.04, at(0, -0.05, 0.45), cushion));
   o.parts.push_back(makeRoundedBox({0.9, 0.1, 0.3}, 0.06, at(0, 0.3, 0.6), fabric));
@@ -246,9 +247,9 @@ Scene cars() {
                                   sine(0, 0, 0.003, 2.7)};
   c1.trajectory.rotation_terms = {sine(0.02, 0, 0, 1.9), sine(0, 0.015, 0, 2.3, 1.0)};
   c1.trajectory.face_velocity = true;
-  SceneObject c2 = car(2, pattern(Texture::kChecker, {0.8f, 0.45f, 0.1f}, {0.95f, 0.85f, 0.6f},
-                                  0.05),
-                       solid(0.5f, 0.3f, 0.1f));
+  SceneObject c2 =
+      car(2, pattern(Texture::kChecker, {0.8f, 0.45f, 0.1f}, {0.95f, 0.85f, 0.6f}, 0.05),
+          solid(0.5f, 0.3f, 0.1f));
   c2.trajectory.origin_m = centre;
   c2.trajectory.position_terms = {sine(0.45, 0, 0, 0.11, kPi / 2), sine(0, -0.22, 0, 0.11),
                                   sine(0, 0, 0.003, 3.1, 0.5)};

@@ -119,8 +119,8 @@ inline void sphereAt(double r, double zc, V3 o, V3 d, double t_min, double* best
 /// Side of the infinite cylinder x^2 + y^2 = r^2, restricted to |z| <= hz.
 inline void cylinderSide(double r, double hz, V3 o, V3 d, double t_min, double* best) {
   double t0, t1;
-  if (!quadratic(d.x * d.x + d.y * d.y, o.x * d.x + o.y * d.y, o.x * o.x + o.y * o.y - r * r,
-                 &t0, &t1)) {
+  if (!quadratic(d.x * d.x + d.y * d.y, o.x * d.x + o.y * d.y, o.x * o.x + o.y * o.y - r * r, &t0,
+                 &t1)) {
     return;
   }
   if (std::fabs(o.z + t0 * d.z) <= hz) keepNearest(t0, t_min, best);

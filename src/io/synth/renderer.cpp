@@ -57,8 +57,7 @@ Prepared prepare(const Primitive& prim, const Eigen::Isometry3d& T_world_primiti
   const Eigen::Isometry3d T_camera_primitive = T_primitive_camera.inverse();
   double umin = kInf, umax = -kInf, vmin = kInf, vmax = -kInf;
   for (int k = 0; k < 8; ++k) {
-    const Eigen::Vector3d corner((k & 1) ? h.x : -h.x, (k & 2) ? h.y : -h.y,
-                                 (k & 4) ? h.z : -h.z);
+    const Eigen::Vector3d corner((k & 1) ? h.x : -h.x, (k & 2) ? h.y : -h.y, (k & 4) ? h.z : -h.z);
     const Eigen::Vector3d c = T_camera_primitive * corner;
     if (c.z() < near_m) return p;  // straddles the camera plane: keep the whole image
     p.min_depth_m = k == 0 ? c.z() : std::min(p.min_depth_m, c.z());
@@ -116,10 +115,9 @@ Intrinsics defaultIntrinsics(int width, int height) {
 }
 
 Renderer::Renderer(const RenderOptions& options) : options_(options) {
-  if (options.width < 1 || options.height < 1 || options.width > 16384 ||
-      options.height > 16384) {
-    throw InvalidArgument("synthetic renderer: image size " + std::to_string(options.width) +
-                          "x" + std::to_string(options.height) +
+  if (options.width < 1 || options.height < 1 || options.width > 16384 || options.height > 16384) {
+    throw InvalidArgument("synthetic renderer: image size " + std::to_string(options.width) + "x" +
+                          std::to_string(options.height) +
                           " is out of range: use 1..16384 pixels per side");
   }
   K_ = options.intrinsics.valid() ? options.intrinsics

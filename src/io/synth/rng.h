@@ -19,8 +19,7 @@ inline uint64_t mix64(uint64_t x) {
 
 /// Seed of an independent stream for (seed, a, b, c), e.g. (seed, frame, row, kStreamNoise).
 inline uint64_t streamSeed(uint64_t seed, uint64_t a, uint64_t b = 0, uint64_t c = 0) {
-  return mix64(mix64(mix64(mix64(seed) ^ a) ^ (b + 0x632be59bd9b4e019ull)) ^
-               (c + 0x85157af5ull));
+  return mix64(mix64(mix64(mix64(seed) ^ a) ^ (b + 0x632be59bd9b4e019ull)) ^ (c + 0x85157af5ull));
 }
 
 /// xoshiro256** generator with uniform and normal variates.

@@ -45,15 +45,12 @@ float valueNoise(double x, double y, double z) {
   return lerp(lerp(c00, c10, ty), lerp(c01, c11, ty), tz);
 }
 
-std::array<float, 3> mix(const std::array<float, 3>& a, const std::array<float, 3>& b,
-                         float t) {
+std::array<float, 3> mix(const std::array<float, 3>& a, const std::array<float, 3>& b, float t) {
   return {a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t, a[2] + (b[2] - a[2]) * t};
 }
 
 /// Cell index with a tiny offset so faces lying exactly on a cell boundary do not flicker.
-int32_t cell(double v, double scale) {
-  return static_cast<int32_t>(std::floor(v / scale + 1e-4));
-}
+int32_t cell(double v, double scale) { return static_cast<int32_t>(std::floor(v / scale + 1e-4)); }
 
 }  // namespace
 

@@ -25,8 +25,8 @@ std::string where(const std::string& preset, const std::string& key, const std::
   return "synth:" + preset + ": query parameter " + key + "=" + value;
 }
 
-long long parseInteger(const std::string& preset, const std::string& key,
-                       const std::string& value, long long lo, long long hi) {
+long long parseInteger(const std::string& preset, const std::string& key, const std::string& value,
+                       long long lo, long long hi) {
   errno = 0;
   char* end = nullptr;
   const long long v = std::strtoll(value.c_str(), &end, 10);
@@ -89,8 +89,8 @@ SynthOptions synthOptionsFromQuery(const std::string& preset,
     } else if (key == "threads") {
       o.threads = static_cast<int>(parseInteger(preset, key, value, 0, 64));
     } else {
-      throw IoError("synth:" + preset + ": unknown query parameter '" + key +
-                    "': valid ones are " + joined(synthQueryKeys()));
+      throw IoError("synth:" + preset + ": unknown query parameter '" + key + "': valid ones are " +
+                    joined(synthQueryKeys()));
     }
   }
   if (source.fx > 0 || source.fy > 0 || source.cx > 0 || source.cy > 0) {
@@ -136,15 +136,14 @@ bool SynthSource::next(Frame& frame) {
 
 std::string SynthSource::describe() const {
   char text[256];
-  std::snprintf(text, sizeof(text),
-                "synthetic scene '%s' (%lld frames, %dx%d, seed %llu, noise %s, detections %s)",
-                scene_.name.c_str(), static_cast<long long>(frames_), options_.width,
-                options_.height, static_cast<unsigned long long>(options_.seed),
-                options_.noise ? "on" : "off",
-                options_.detector.every_n_frames > 0
-                    ? ("every " + std::to_string(options_.detector.every_n_frames) + " frames")
-                          .c_str()
-                    : "off");
+  std::snprintf(
+      text, sizeof(text),
+      "synthetic scene '%s' (%lld frames, %dx%d, seed %llu, noise %s, detections %s)",
+      scene_.name.c_str(), static_cast<long long>(frames_), options_.width, options_.height,
+      static_cast<unsigned long long>(options_.seed), options_.noise ? "on" : "off",
+      options_.detector.every_n_frames > 0
+          ? ("every " + std::to_string(options_.detector.every_n_frames) + " frames").c_str()
+          : "off");
   return text;
 }
 
@@ -177,8 +176,8 @@ void SynthSource::renderFrame(int64_t index, Frame* frame) const {
     if (half_width > 0) {
       parallelFor(r.color.rows, threads, [&](int vb, int ve) {
         for (int v = vb; v < ve; ++v) {
-          Rng rng(streamSeed(options_.seed, static_cast<uint64_t>(index),
-                             static_cast<uint64_t>(v), kColorStream));
+          Rng rng(streamSeed(options_.seed, static_cast<uint64_t>(index), static_cast<uint64_t>(v),
+                             kColorStream));
           auto* row = r.color.ptr<uint8_t>(v);
           for (int i = 0; i < r.color.cols; ++i) {
             uint64_t bits = rng.next();
@@ -196,8 +195,8 @@ void SynthSource::renderFrame(int64_t index, Frame* frame) const {
   }
   frame->color = r.color;
   if (isDetectionFrame(index, options_.detector)) {
-    frame->detections = simulateDetections(r.instance_ids, classes_, options_.seed, index,
-                                           options_.detector);
+    frame->detections =
+        simulateDetections(r.instance_ids, classes_, options_.seed, index, options_.detector);
   }
 }
 

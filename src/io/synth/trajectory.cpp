@@ -50,7 +50,8 @@ double Trajectory::warpedTime(double t) const {
 Eigen::Vector3d Trajectory::position(double t) const {
   const double s = warpedTime(t);
   Eigen::Vector3d p = origin_m + sumTerms(position_terms, s);
-  for (const auto& m : moves) p += m.delta_m * smootherstep((t - m.start_s) / (m.end_s - m.start_s));
+  for (const auto& m : moves)
+    p += m.delta_m * smootherstep((t - m.start_s) / (m.end_s - m.start_s));
   return p;
 }
 
@@ -66,8 +67,8 @@ Eigen::Isometry3d Trajectory::pose(double t) const {
     // Heading of the sinusoidal path; at rest (s = 0) the heading of the first motion.
     const Eigen::Vector3d v = sumTermsDerivative(position_terms, s);
     if (std::hypot(v.x(), v.y()) > 1e-12) {
-      R_heading = Eigen::AngleAxisd(std::atan2(v.y(), v.x()), Eigen::Vector3d::UnitZ())
-                      .toRotationMatrix();
+      R_heading =
+          Eigen::AngleAxisd(std::atan2(v.y(), v.x()), Eigen::Vector3d::UnitZ()).toRotationMatrix();
     }
   }
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();

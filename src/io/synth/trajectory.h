@@ -52,8 +52,8 @@ struct Trajectory {
 /// A hand-held-like camera: centre on a smooth path, looking at a smoothly moving target with
 /// world +z up, plus small rotational tremor (camera frame: x right, y down, z forward).
 struct CameraRig {
-  Trajectory path;                    // camera centre (position part used)
-  Trajectory target;                  // look-at point (position part used)
+  Trajectory path;                   // camera centre (position part used)
+  Trajectory target;                 // look-at point (position part used)
   std::vector<Sinusoid> tremor_rad;  // rotation vector terms in the camera frame
 
   /// T_world_camera at clip time t (seconds).
