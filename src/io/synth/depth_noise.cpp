@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "io/synth/parallel.h"
 #include "io/synth/rng.h"
@@ -19,6 +20,20 @@ double fastAcos(double x) {
   return std::sqrt(1.0 - x) * (1.5707288 + x * (-0.2121144 + x * (0.0742610 - 0.0187293 * x)));
 }
 
+/// Nguyen et al.'s axial sigma (metres) at depth z (m) and incidence angle theta (rad).
+inline double sigmaOf(const DepthNoiseOptions& o, double z, double theta) {
+  const double dz = z - o.sigma_offset_m;
+  double sigma = o.sigma_base_m + o.sigma_quadratic_per_m * dz * dz;
+  if (theta > 0.0 && z > 0.0) {
+    const double ratio = theta / std::max(kPi / 2 - theta, 1e-3);
+    sigma += o.sigma_angle_m / std::sqrt(z) * ratio * ratio;
+  }
+  return sigma;
+}
+
+/// Below this angle the incidence term is < 3e-6 m (under 0.3 % of the smallest sigma): skipped.
+constexpr double kMinAngleTermRad = 0.2;
+
 bool isEdge(const cv::Mat& depth, int u, int v, double z, double rel) {
   static constexpr int kDu[4] = {1, -1, 0, 0};
   static constexpr int kDv[4] = {0, 0, 1, -1};
@@ -34,14 +49,7 @@ bool isEdge(const cv::Mat& depth, int u, int v, double z, double rel) {
 }  // namespace
 
 double DepthNoiseModel::axialSigma(double z, double theta) const {
-  const auto& o = options_;
-  const double dz = z - o.sigma_offset_m;
-  double sigma = o.sigma_base_m + o.sigma_quadratic_per_m * dz * dz;
-  if (theta > 0.0 && z > 0.0) {
-    const double rest = std::max(kPi / 2 - theta, 1e-3);
-    sigma += o.sigma_angle_m / std::sqrt(z) * theta * theta / (rest * rest);
-  }
-  return sigma;
+  return sigmaOf(options_, z, theta);
 }
 
 double DepthNoiseModel::quantizationStep(double z) const {
@@ -69,6 +77,19 @@ void DepthNoiseModel::apply(const cv::Mat& depth, const cv::Mat& cos_incidence, 
   cv::Mat result(depth.size(), CV_32F);
   const double fb_quant = o.focal_px * o.baseline_m;
   const double inv_step = 1.0 / o.disparity_step_px;
+  // Depth of k quantisation steps of disparity: fb / (k * step), tabulated for the range of
+  // interest (k beyond it falls back to the division).
+  const double cos_small_angle = std::cos(kMinAngleTermRad);
+  std::vector<double> depth_of_steps;
+  if (o.quantize) {
+    const size_t k_max = static_cast<size_t>(
+        std::min(1e6, fb_quant * inv_step / std::max(0.5 * o.min_range_m, 0.05)) + 2);
+    depth_of_steps.resize(k_max);
+    depth_of_steps[0] = 0.0;
+    for (size_t k = 1; k < k_max; ++k) {
+      depth_of_steps[k] = fb_quant / (static_cast<double>(k) * o.disparity_step_px);
+    }
+  }
   const double fb_shadow = fx_px * o.baseline_m;
   const double cos_min = std::cos(o.max_incidence_deg * kPi / 180.0);
   const int W = depth.cols;
@@ -120,16 +141,16 @@ void DepthNoiseModel::apply(const cv::Mat& depth, const cv::Mat& cos_incidence, 
         if (!cos_incidence.empty()) {
           const double c = cos_incidence.at<float>(v, u);
           if (c < cos_min) continue;
-          theta = fastAcos(std::min(1.0, c));
+          if (c < cos_small_angle) theta = fastAcos(c);
         }
-        if (o.axial_noise) z += axialSigma(z, theta) * n;
+        if (o.axial_noise) z += sigmaOf(o, z, theta) * n;
         if (o.quantize && z > 0.0) {
           // Disparity in steps (positive): rounding by truncation of x + 0.5 avoids a libm call.
-          const double steps = fb_quant / z * inv_step;
-          const double dq =
-              static_cast<double>(static_cast<int64_t>(steps + 0.5)) * o.disparity_step_px;
-          if (dq <= 0.0) continue;
-          z = fb_quant / dq;
+          const auto k = static_cast<int64_t>(fb_quant / z * inv_step + 0.5);
+          if (k <= 0) continue;
+          z = static_cast<size_t>(k) < depth_of_steps.size()
+                  ? depth_of_steps[static_cast<size_t>(k)]
+                  : fb_quant / (static_cast<double>(k) * o.disparity_step_px);
         }
         if (z < o.min_range_m || z > o.max_range_m) continue;
         dst[u] = static_cast<float>(z);

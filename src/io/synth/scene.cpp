@@ -72,7 +72,9 @@ std::array<float, 3> albedoAt(const Material& m, V3 p) {
     case Texture::kTiles: {
       const int32_t cx = cell(p.x, s), cy = cell(p.y, s), cz = cell(p.z, s);
       const float tile = 0.35f * unitHash(cx, cy, cz) + ((cx + cy + cz) & 1 ? 0.45f : 0.0f);
-      const float grain = 0.2f * valueNoise(p.x * 8.0 / s, p.y * 40.0 / s, p.z * 8.0 / s);
+      // Wood-like grain: stripes along x whose phase wanders with y (cheaper than noise).
+      const float grain = static_cast<float>(
+          0.1 + 0.1 * std::sin(40.0 * p.y / s + 3.0 * std::sin(5.0 * p.x / s + cx * 1.7)));
       return mix(m.albedo_bgr, m.albedo2_bgr, std::min(1.0f, tile + grain));
     }
   }
