@@ -20,4 +20,7 @@ int cmdVersion(const std::vector<std::string>& args);
 int cmdConfig(const std::vector<std::string>& args);
 int cmdEval(const std::vector<std::string>& args);
 
+int cmdSynth(const std::vector<std::string>& args);
+
+
 }  // namespace emf::cli

@@ -21,6 +21,9 @@ const std::vector<Command>& commands() {
       {"config", "list, check or print configuration keys", emf::cli::cmdConfig},
       {"eval", "trajectory errors (ATE, RPE) of the camera and objects vs ground truth",
        emf::cli::cmdEval},
+
+      {"synth", "render a synthetic dynamic scene into a TUM folder with ground truth",
+       emf::cli::cmdSynth},
   };
   return kCommands;
 }

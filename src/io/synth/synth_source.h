@@ -1,0 +1,80 @@
+// The synthetic world as a FrameSource: `synth:<preset>[?frames=N&seed=S&width=W&height=H&
+// det_every=N&noise=0|1&threads=N]`. Frames carry exact ground truth (T_world_camera_gt,
+// T_world_object_gt by object id, instance_ids) and, every det_every frames, simulated
+// detections. Timestamps are index / 30 s, timestamp_text "%.6f".
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "io/frame_source.h"
+#include "io/synth/depth_noise.h"
+#include "io/synth/detector_sim.h"
+#include "io/synth/renderer.h"
+#include "io/synth/scene.h"
+
+namespace emf::io::synth {
+
+struct SynthOptions {
+  std::string preset = "room";
+  /// Number of frames (0 = the preset's default).
+  int frames = 0;
+  /// Drives depth noise, colour noise and detections (not the geometry or motion).
+  uint64_t seed = 1;
+  int width = 640, height = 480;
+  /// Pinhole camera override; when not valid(), defaultIntrinsics(width, height).
+  Intrinsics intrinsics;
+  /// false: exact depth and noise-free colour (the depth_noise / colour settings are ignored).
+  bool noise = true;
+  DepthNoiseOptions depth_noise;
+  /// Colour sensor noise: uniform per channel with this standard deviation (grey levels).
+  double color_noise_sigma = 2.0;
+  /// The simulated detector (every_n_frames = 0: no detections).
+  DetectorSimOptions detector;
+  /// Rendering/noise threads (0 = hardware concurrency).
+  int threads = 0;
+};
+
+/// Valid query keys of `synth:` URIs, in documentation order.
+const std::vector<std::string>& synthQueryKeys();
+
+/// SynthOptions for `synth:<preset>?<query>` on top of `source` (fx/fy/cx/cy > 0 override the
+/// camera, max_frames > 0 caps the frame count). Throws IoError naming an unknown preset or
+/// query key (listing the valid ones) or a malformed / out-of-range value.
+SynthOptions synthOptionsFromQuery(const std::string& preset,
+                                   const std::map<std::string, std::string>& query,
+                                   const SourceOptions& source);
+
+class SynthSource : public FrameSource {
+ public:
+  /// Throws IoError for an unknown preset, InvalidArgument for a bad size.
+  explicit SynthSource(const SynthOptions& options);
+
+  Intrinsics intrinsics() const override { return renderer_.intrinsics(); }
+  bool next(Frame& frame) override;
+  int64_t size() const override { return frames_; }
+  std::string describe() const override;
+
+  const Scene& scene() const { return scene_; }
+  const SynthOptions& options() const { return options_; }
+  /// Renders frame `index` (0-based) into *frame, independently of the read position.
+  void renderFrame(int64_t index, Frame* frame) const;
+
+ private:
+  SynthOptions options_;
+  Scene scene_;
+  Renderer renderer_;
+  DepthNoiseModel noise_;
+  std::map<int, std::string> classes_;
+  int64_t frames_ = 0;
+  int64_t next_index_ = 0;
+};
+
+/// The entry the URI parser calls for `synth:<preset>?<query>`.
+std::unique_ptr<FrameSource> openSynthSource(const std::string& preset,
+                                             const std::map<std::string, std::string>& query,
+                                             const SourceOptions& options);
+
+}  // namespace emf::io::synth

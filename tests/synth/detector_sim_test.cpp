@@ -1,0 +1,131 @@
+// Simulated detector: miss rate, false positives, shuffled ids, mask quality (IoU with the
+// ground-truth instance masks), scores, boxes, determinism.
+#include "io/synth/detector_sim.h"
+
+#include <gtest/gtest.h>
+
+#include <map>
+#include <opencv2/imgproc.hpp>
+#include <set>
+
+namespace emf::io::synth {
+namespace {
+
+/// Three objects of different sizes on a 320x240 instance image.
+cv::Mat threeObjects() {
+  cv::Mat ids = cv::Mat::zeros(240, 320, CV_16U);
+  cv::rectangle(ids, cv::Rect(20, 30, 90, 70), cv::Scalar(1), cv::FILLED);
+  cv::circle(ids, cv::Point(200, 80), 40, cv::Scalar(2), cv::FILLED);
+  cv::ellipse(ids, cv::Point(160, 190), cv::Size(70, 25), 15, 0, 360, cv::Scalar(5), cv::FILLED);
+  return ids;
+}
+
+double iou(const cv::Mat& a, const cv::Mat& b) {
+  const double inter = cv::countNonZero(a & b);
+  const double uni = cv::countNonZero(a | b);
+  return uni > 0 ? inter / uni : 0.0;
+}
+
+TEST(SynthDetector, StatisticsOverManyFrames) {
+  const cv::Mat ids = threeObjects();
+  const std::map<int, std::string> classes = {{1, "suitcase"}, {2, "sports ball"}, {5, "car"}};
+  DetectorSimOptions o;
+  int expected = 0, detected = 0, false_positives = 0, frames = 0, reordered = 0, multi = 0;
+  double iou_sum = 0, iou_min = 1, iou_max = 0;
+  std::set<std::pair<int, int>> object_to_id;
+  for (int64_t f = 0; f < 800; ++f, ++frames) {
+    std::vector<int> objects;
+    const auto dets = simulateDetections(ids, classes, 99, f, o, &objects);
+    ASSERT_EQ(dets.size(), objects.size());
+    expected += 3;
+    std::vector<int> true_order;
+    for (size_t i = 0; i < dets.size(); ++i) {
+      const auto& d = dets[i];
+      EXPECT_EQ(d.id, static_cast<int>(i) + 1);
+      EXPECT_GE(d.score, 0.5f);
+      EXPECT_LE(d.score, 1.0f);
+      ASSERT_EQ(d.mask.type(), CV_32F);
+      ASSERT_EQ(d.mask.size(), ids.size());
+      const cv::Mat binary = d.mask > 0.5f;
+      EXPECT_EQ(cv::countNonZero(binary), cv::countNonZero(d.mask));  // values are 0 or 1
+      EXPECT_EQ(d.box, cv::boundingRect(binary));
+      if (objects[i] == 0) {
+        ++false_positives;
+        EXPECT_LE(d.score, 0.75f);
+        continue;
+      }
+      ++detected;
+      true_order.push_back(objects[i]);
+      object_to_id.insert({objects[i], d.id});
+      EXPECT_EQ(d.class_name, classes.at(objects[i]));
+      const double q = iou(binary, ids == objects[i]);
+      iou_sum += q;
+      iou_min = std::min(iou_min, q);
+      iou_max = std::max(iou_max, q);
+    }
+    if (true_order.size() >= 2) {
+      ++multi;
+      if (!std::is_sorted(true_order.begin(), true_order.end())) ++reordered;
+    }
+  }
+  const double miss_rate = 1.0 - static_cast<double>(detected) / expected;
+  EXPECT_NEAR(miss_rate, 0.10, 0.025);  // 2400 draws: sd of the rate 0.006
+  EXPECT_NEAR(static_cast<double>(false_positives) / frames, 0.15, 0.04);  // sd 0.013
+  const double mean_iou = iou_sum / detected;
+  EXPECT_GT(mean_iou, 0.75);  // imperfect ...
+  EXPECT_LT(mean_iou, 0.97);  // ... but not perfect
+  EXPECT_GT(iou_min, 0.5);
+  EXPECT_LT(iou_max, 1.0);
+  // Ids are shuffled: every object got several different ids, and the order is often not the
+  // object order (random order of 2-3 items is sorted in 1/2 or 1/6 of the cases).
+  for (int obj : {1, 2, 5}) {
+    int distinct = 0;
+    for (const auto& [o_id, d_id] : object_to_id) distinct += o_id == obj;
+    EXPECT_GE(distinct, 3) << "object " << obj;
+  }
+  EXPECT_GT(static_cast<double>(reordered) / multi, 0.35);
+}
+
+TEST(SynthDetector, DeterministicPerSeedAndFrame) {
+  const cv::Mat ids = threeObjects();
+  const std::map<int, std::string> classes = {{1, "a"}, {2, "b"}, {5, "c"}};
+  auto signature = [&](uint64_t seed, int64_t frame) {
+    std::string s;
+    for (const auto& d : simulateDetections(ids, classes, seed, frame, {})) {
+      s += d.class_name + std::to_string(d.score) + std::to_string(cv::countNonZero(d.mask)) + ";";
+    }
+    return s;
+  };
+  EXPECT_EQ(signature(1, 30), signature(1, 30));
+  int differ_seed = 0, differ_frame = 0;
+  for (int64_t f = 0; f < 20; ++f) {
+    differ_seed += signature(1, f) != signature(2, f);
+    differ_frame += signature(1, f) != signature(1, f + 100);
+  }
+  EXPECT_GE(differ_seed, 18);
+  EXPECT_GE(differ_frame, 18);
+}
+
+TEST(SynthDetector, TinyAndUnlistedObjectsAreNotDetected) {
+  cv::Mat ids = cv::Mat::zeros(240, 320, CV_16U);
+  cv::rectangle(ids, cv::Rect(10, 10, 5, 5), cv::Scalar(1), cv::FILLED);      // 25 px < 77
+  cv::rectangle(ids, cv::Rect(100, 100, 60, 60), cv::Scalar(7), cv::FILLED);  // not listed
+  DetectorSimOptions o;
+  o.false_positive_rate = 0.0;
+  o.miss_rate = 0.0;
+  for (int64_t f = 0; f < 20; ++f) {
+    EXPECT_TRUE(simulateDetections(ids, {{1, "cup"}}, 1, f, o).empty());
+  }
+}
+
+TEST(SynthDetector, DetectionFrames) {
+  DetectorSimOptions o;
+  EXPECT_TRUE(isDetectionFrame(0, o));
+  EXPECT_FALSE(isDetectionFrame(29, o));
+  EXPECT_TRUE(isDetectionFrame(60, o));
+  o.every_n_frames = 0;
+  EXPECT_FALSE(isDetectionFrame(0, o));
+}
+
+}  // namespace
+}  // namespace emf::io::synth
