@@ -18,6 +18,6 @@ struct Command {
 int cmdInfo(const std::vector<std::string>& args);
 int cmdVersion(const std::vector<std::string>& args);
 int cmdConfig(const std::vector<std::string>& args);
-
+int cmdDevices(const std::vector<std::string>& args);
 
 }  // namespace emf::cli

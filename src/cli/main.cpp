@@ -19,6 +19,8 @@ const std::vector<Command>& commands() {
        emf::cli::cmdInfo},
       {"version", "print the version", emf::cli::cmdVersion},
       {"config", "list, check or print configuration keys", emf::cli::cmdConfig},
+      {"devices", "list connected RGB-D sensors and their backends; watch hot-plug",
+       emf::cli::cmdDevices},
   };
   return kCommands;
 }
