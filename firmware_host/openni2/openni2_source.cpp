@@ -130,6 +130,10 @@ struct Openni2Source::Impl : openni::OpenNI::DeviceDisconnectedListener,
     if (info != nullptr && uri == info->getUri()) error_state = static_cast<int>(state);
   }
 
+  // Also runs when the constructor of Openni2Source throws half-way (listeners must not outlive
+  // this object).
+  ~Impl() override { shutdown(); }
+
   void shutdown() {
     if (listening) {
       openni::OpenNI::removeDeviceDisconnectedListener(this);
