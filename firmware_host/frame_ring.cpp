@@ -237,11 +237,13 @@ RingStatus FrameRing::acquire(const FrameSlot** slot, double timeout_s) {
         "frame ring: acquire() called while still holding a slot: call "
         "release() after reading each frame");
   }
-  Backoff backoff(timeout_s);
   uint32_t idx = 0;
-  while (!tryTakeOldest(&idx)) {
-    if (stopped()) return RingStatus::kStopped;
-    if (!backoff.wait()) return RingStatus::kTimeout;
+  if (!tryTakeOldest(&idx)) {  // fast path first: no clock read when a frame is waiting
+    Backoff backoff(timeout_s);
+    while (!tryTakeOldest(&idx)) {
+      if (stopped()) return RingStatus::kStopped;
+      if (!backoff.wait()) return RingStatus::kTimeout;
+    }
   }
   consumed_.fetch_add(1, std::memory_order_relaxed);
   read_slot_ = idx;
