@@ -49,6 +49,7 @@ std::unique_ptr<io::FrameSource> openSensorSource(const std::string& uri,
                                                   const io::SourceOptions& options) {
   bool reconnect = true;
   const std::string inner_uri = stripReconnect(uri, &reconnect);
+  (void)options;  // unused when no backend is compiled in
   ReconnectingSource::Factory factory;
   if (uri.rfind("openni2:", 0) == 0) {
 #ifdef EMF_HAVE_OPENNI2
