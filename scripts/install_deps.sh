@@ -8,7 +8,7 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config git
   pocl-opencl-icd ocl-icd-opencl-dev opencl-headers clinfo
   libeigen3-dev libopencv-dev libyaml-cpp-dev libgtest-dev libgmock-dev
-  libusb-1.0-0-dev libopenni2-dev libv4l-dev zlib1g-dev libpng-dev nlohmann-json3-dev
+  libusb-1.0-0-dev libopenni2-dev libv4l-dev zlib1g-dev libpng-dev libjpeg-dev nlohmann-json3-dev
   python3 python3-numpy python3-onnx python3-open3d
 )
 

@@ -24,6 +24,9 @@ const std::vector<Command>& commands() {
 
       {"synth", "render a synthetic dynamic scene into a TUM folder with ground truth",
        emf::cli::cmdSynth},
+
+      {"devices", "list connected RGB-D sensors and their backends; watch hot-plug",
+       emf::cli::cmdDevices},
   };
   return kCommands;
 }
