@@ -21,6 +21,7 @@ int cmdConfig(const std::vector<std::string>& args);
 int cmdEval(const std::vector<std::string>& args);
 
 int cmdSynth(const std::vector<std::string>& args);
+int cmdRun(const std::vector<std::string>& args);
 
 
 int cmdDevices(const std::vector<std::string>& args);

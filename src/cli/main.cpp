@@ -15,6 +15,8 @@ using emf::cli::Command;
 
 const std::vector<Command>& commands() {
   static const std::vector<Command> kCommands = {
+      {"run", "run the SLAM on a source; writes trajectory, meshes and a summary",
+       emf::cli::cmdRun},
       {"info", "version, OpenCL devices (and the selected one), backends, plugin path",
        emf::cli::cmdInfo},
       {"version", "print the version", emf::cli::cmdVersion},

@@ -2,9 +2,11 @@
 #include <algorithm>
 
 #include "common/error.h"
+#include "firmware_host/sensor_sources.h"
 #include "io/cofusion_source.h"
 #include "io/frame_source.h"
 #include "io/klg.h"
+#include "io/synth/synth_source.h"
 #include "io/tum_source.h"
 #include "io/uri.h"
 
@@ -57,12 +59,12 @@ std::unique_ptr<FrameSource> openSource(const std::string& uri_text, const Sourc
                         q.integer("height", 1, 100000).value_or(480));
     return std::make_unique<KlgSource>(uri.path, applySourceQuery(q, options), size, depth_scale);
   }
-  // The lead wires these in when the branches are merged:
-  //   synth:   return openSynthSource(uri.path, uri.query, options);  (src/io/synth/synth_source.h)
-  //   openni2: / v4l2:  the firmware_host capture sources.
-  if (uri.scheme == "synth" || uri.scheme == "openni2" || uri.scheme == "v4l2") {
-    throw IoError("source URI '" + uri.text + "': scheme '" + uri.scheme +
-                  ":' is not built in this binary (available: tum:, cofusion:, klg:)");
+  if (uri.scheme == "synth") {
+    requirePath(uri, "preset name");
+    return synth::openSynthSource(uri.path, uri.query, options);
+  }
+  if (uri.scheme == "openni2" || uri.scheme == "v4l2") {
+    return fw::openSensorSource(uri_text, options);
   }
   throw IoError("source URI '" + uri.text + "': unknown scheme '" + uri.scheme +
                 ":'; use tum:<dir>, cofusion:<dir>, klg:<file>, synth:<preset>, openni2:[uri] "
