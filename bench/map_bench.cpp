@@ -166,6 +166,8 @@ struct Result {
   double surface_err_mm = 0, surface_coverage = 0, mesh_s = 0;
   size_t mesh_triangles = 0, error_points = 0;
   int raycast_valid_pct = 0;
+  int object_blocks = 0;
+  double object_bytes_per_voxel = 0;
 };
 
 double percentile(std::vector<double> v, double q) {
@@ -219,7 +221,7 @@ Result run(emf::cl::Context& ctx, const BenchSequence& seq, const Config& cfg, i
   emf::map::DeviceImage image(ctx, k.width, k.height);
   emf::map::RayCaster caster(ctx, o, k.width, k.height);
   emf::map::IntegrationInput in;
-  in.depth = &image;
+  in.depth = &image.buffer();
   in.intrinsics = k;
   {
     // Warm-up on a throwaway volume: PoCL specialises kernels on first launch.
@@ -287,6 +289,33 @@ Result run(emf::cl::Context& ctx, const BenchSequence& seq, const Config& cfg, i
                              static_cast<double>(vol.indexBytes())) /
                                 (static_cast<double>(r.blocks) * kBlockVoxels)
                           : 0;
+
+  {
+    // An object volume (64^3 voxels, 1.5 m in front of the first camera) fused on every 10th
+    // frame with a detection mask of p_fg = 0.5: measures object storage (TSDF + counts).
+    emf::map::VolumeSpec ospec =
+        emf::map::VolumeSpec::object(o, 64, static_cast<float>(cfg.voxel_m));
+    Eigen::Isometry3d T_wo = seq.frames.front().T_world_camera;
+    T_wo.translation() =
+        T_wo * Eigen::Vector3d(0, 0, 1.5) - T_wo.linear() * ospec.extentM().cast<double>() / 2;
+    emf::map::Volume object(pool, ospec, T_wo);
+    const cv::Mat half_mask(k.height, k.width, CV_32FC1, cv::Scalar(0.5f));
+    emf::map::DeviceImage mask(ctx, k.width, k.height);
+    mask.upload(half_mask, "mask");
+    emf::map::IntegrationInput oin = in;
+    oin.fg_mask = &mask.buffer();
+    for (size_t i = 0; i < depth.size(); i += 10) {
+      image.upload(depth[i], "depth");
+      oin.T_world_camera = seq.frames[i].T_world_camera;
+      object.fuse(oin);
+    }
+    r.object_blocks = object.allocatedBlocks();
+    r.object_bytes_per_voxel = r.object_blocks
+                                   ? (2.0 * r.object_blocks * emf::map::VoxelPool::kSlotBytes +
+                                      static_cast<double>(object.indexBytes())) /
+                                         (static_cast<double>(r.object_blocks) * kBlockVoxels)
+                                   : 0;
+  }
 
   // Mesh and reconstruction error.
   const auto m0 = Clock::now();
@@ -436,8 +465,16 @@ int main(int argc, char** argv) {
         "same pose (rc_cpu: CPU time); rc_px = pixels with "
         "a surface (last frame); B/vox = (used slots + index grid) / allocated voxels;\n"
         "err_mm = mean distance of ground-truth depth points (every %d-th frame, every 4th "
-        "pixel) to the mesh, over the cover share within 10 cm.\n\n",
+        "pixel) to the mesh, over the cover share within 10 cm.\n",
         error_every);
+    for (const Result& r : results) {
+      std::printf(
+          "object volume %dx%d @ %gcm: %d blocks, %.2f bytes per voxel (TSDF + Fg/Bg "
+          "counts + index)\n",
+          r.config.width, r.config.height, r.config.voxel_m * 100, r.object_blocks,
+          r.object_bytes_per_voxel);
+    }
+    std::printf("\n");
     for (const Result& r : results) {
       std::printf(
           "map_bench res=%dx%d voxel_m=%g integrate_ms=%.2f integrate_p90_ms=%.2f "

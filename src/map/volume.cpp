@@ -139,15 +139,25 @@ cl_int4 Volume::dimsBlocks() const {
 }
 
 void Volume::checkFrame(const IntegrationInput& frame, const char* what) const {
-  if (!frame.depth || frame.depth->width() <= 0) {
-    throw InvalidArgument(std::string(what) + ": no depth image uploaded");
+  if (!frame.depth || !frame.depth->get()) {
+    throw InvalidArgument(std::string(what) + ": no depth image");
   }
-  if (frame.intrinsics.width != frame.depth->width() ||
-      frame.intrinsics.height != frame.depth->height() || !frame.intrinsics.valid()) {
-    throw InvalidArgument(
-        std::string(what) + ": intrinsics " + std::to_string(frame.intrinsics.width) + "x" +
-        std::to_string(frame.intrinsics.height) + " do not match the depth image " +
-        std::to_string(frame.depth->width()) + "x" + std::to_string(frame.depth->height()));
+  const io::Intrinsics& k = frame.intrinsics;
+  if (!k.valid()) {
+    throw InvalidArgument(std::string(what) + ": invalid intrinsics " + std::to_string(k.width) +
+                          "x" + std::to_string(k.height));
+  }
+  // The kernels read width x height floats from each image: check the buffers hold them.
+  const size_t need = static_cast<size_t>(k.width) * static_cast<size_t>(k.height) * sizeof(float);
+  for (const cl::MemHandle* m : {frame.depth, frame.weights, frame.fg_mask}) {
+    if (!m) continue;
+    size_t bytes = 0;
+    EMF_CL_CHECK(clGetMemObjectInfo(m->get(), CL_MEM_SIZE, sizeof(bytes), &bytes, nullptr));
+    if (bytes < need) {
+      throw InvalidArgument(std::string(what) + ": an image buffer of " + std::to_string(bytes) +
+                            " bytes is smaller than " + std::to_string(k.width) + "x" +
+                            std::to_string(k.height) + " floats");
+    }
   }
 }
 
@@ -157,9 +167,9 @@ AllocationReport Volume::allocate(const IntegrationInput& frame) {
   const io::Intrinsics& k = frame.intrinsics;
   const cl_int4 dims = dimsBlocks();
   const cl_int w = k.width, h = k.height;
-  cl::setArgs(mark_, frame.depth->buffer(), w, h, static_cast<cl_float>(k.fx),
-              static_cast<cl_float>(k.fy), static_cast<cl_float>(k.cx), static_cast<cl_float>(k.cy),
-              row4(T_volume_camera, 0), row4(T_volume_camera, 1), row4(T_volume_camera, 2),
+  cl::setArgs(mark_, *frame.depth, w, h, static_cast<cl_float>(k.fx), static_cast<cl_float>(k.fy),
+              static_cast<cl_float>(k.cx), static_cast<cl_float>(k.cy), row4(T_volume_camera, 0),
+              row4(T_volume_camera, 1), row4(T_volume_camera, 2),
               static_cast<cl_float>(static_cast<float>(kBlockSize) * spec_.voxel_size_m),
               static_cast<cl_float>(spec_.truncation_m), dims, needed_);
   cl::enqueue(ctx_.queue(), mark_, static_cast<size_t>(w), static_cast<size_t>(h), 0, 16, 16);
@@ -187,7 +197,7 @@ void Volume::integrate(const IntegrationInput& frame) {
   const io::Intrinsics& k = frame.intrinsics;
   const MapOptions& o = pool_.options();
   const size_t global = static_cast<size_t>(last_report_.listed_blocks) * kIntegrateGroup;
-  cl::setArgs(integrate_, block_list_, index_, dimsBlocks(), pool_.voxels(), frame.depth->buffer(),
+  cl::setArgs(integrate_, block_list_, index_, dimsBlocks(), pool_.voxels(), *frame.depth,
               frame.weights ? *frame.weights : pool_.dummy(),
               static_cast<cl_int>(frame.weights != nullptr), static_cast<cl_int>(k.width),
               static_cast<cl_int>(k.height), static_cast<cl_float>(k.fx),
@@ -198,12 +208,12 @@ void Volume::integrate(const IntegrationInput& frame) {
               static_cast<cl_int>(o.free_space_full_weight));
   cl::enqueue(ctx_.queue(), integrate_, global, 0, 0, kIntegrateGroup);
   if (spec_.has_counts && frame.fg_mask) {
-    cl::setArgs(count_, block_list_, count_index_, dimsBlocks(), pool_.voxels(),
-                frame.depth->buffer(), *frame.fg_mask, static_cast<cl_int>(k.width),
-                static_cast<cl_int>(k.height), static_cast<cl_float>(k.fx),
-                static_cast<cl_float>(k.fy), static_cast<cl_float>(k.cx),
-                static_cast<cl_float>(k.cy), row4(T_camera_volume, 0), row4(T_camera_volume, 1),
-                row4(T_camera_volume, 2), static_cast<cl_float>(spec_.voxel_size_m),
+    cl::setArgs(count_, block_list_, count_index_, dimsBlocks(), pool_.voxels(), *frame.depth,
+                *frame.fg_mask, static_cast<cl_int>(k.width), static_cast<cl_int>(k.height),
+                static_cast<cl_float>(k.fx), static_cast<cl_float>(k.fy),
+                static_cast<cl_float>(k.cx), static_cast<cl_float>(k.cy), row4(T_camera_volume, 0),
+                row4(T_camera_volume, 1), row4(T_camera_volume, 2),
+                static_cast<cl_float>(spec_.voxel_size_m),
                 static_cast<cl_float>(spec_.truncation_m));
     cl::enqueue(ctx_.queue(), count_, global, 0, 0, kIntegrateGroup);
   }

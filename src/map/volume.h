@@ -20,7 +20,6 @@
 
 #include "cl/context.h"
 #include "io/frame.h"
-#include "map/device_image.h"
 #include "map/map_math.h"
 #include "map/map_options.h"
 #include "map/voxel_layout.h"
@@ -58,11 +57,12 @@ Eigen::Isometry3d backgroundVolumePose(const MapOptions& options, const VolumeSp
 
 /// One depth frame as the map kernels read it.
 struct IntegrationInput {
-  const DeviceImage* depth = nullptr;      // metres, NaN = invalid
+  const cl::MemHandle* depth = nullptr;    // floats of the intrinsics' size, metres, NaN =
+                                           // invalid (e.g. DeviceImage::buffer())
   const cl::MemHandle* weights = nullptr;  // q(u) in [0, 1] per pixel, or nullptr = all ones
   const cl::MemHandle* fg_mask = nullptr;  // objects: p_fg of the matched detection per pixel
                                            // (NaN = occluded, no update), or nullptr
-  io::Intrinsics intrinsics;               // of `depth` (same size)
+  io::Intrinsics intrinsics;               // of depth (and of weights / fg_mask)
   Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();
 };
 

@@ -36,7 +36,7 @@ class MapTest : public WithClQueue {
     f.depth = std::make_unique<map::DeviceImage>(ctx(), k.width, k.height);
     f.depth->upload(depth, "test depth");
     f.depth_host = depth;
-    f.input.depth = f.depth.get();
+    f.input.depth = &f.depth->buffer();
     f.input.intrinsics = k;
     f.input.T_world_camera = T_wc;
     if (!weights.empty()) {

@@ -164,6 +164,35 @@ TEST_F(Pool, DestroyingAVolumeReturnsItsSlots) {
   EXPECT_EQ(pool.stats().used_slots, 0);
 }
 
+TEST_F(Pool, BadFramesAreRejectedWithAMessage) {
+  const map::MapOptions o = options2cm();
+  map::VoxelPool pool(ctx(), o);
+  const map::VolumeSpec spec = map::VolumeSpec::background(o);
+  map::Volume vol(pool, spec, Eigen::Isometry3d::Identity());
+  const io::Intrinsics small = testIntrinsics(160, 120);
+  Frame f = makeFrame(cv::Mat(small.height, small.width, CV_32FC1, cv::Scalar(1.0f)), small,
+                      Eigen::Isometry3d::Identity());
+  map::IntegrationInput in = f.input;
+  in.intrinsics = testIntrinsics(320, 240);  // larger than the uploaded image
+  try {
+    vol.allocate(in);
+    FAIL() << "expected InvalidArgument";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("320x240"), std::string::npos) << e.what();
+  }
+  in = f.input;
+  in.depth = nullptr;
+  EXPECT_THROW(vol.integrate(in), InvalidArgument);
+  map::DeviceImage image(ctx(), 160, 120);
+  EXPECT_THROW(image.upload(cv::Mat(240, 320, CV_32FC1)), InvalidArgument);
+  EXPECT_THROW(image.upload(cv::Mat(120, 160, CV_16UC1)), InvalidArgument);
+  EXPECT_EQ(pool.stats().used_slots, 0);  // nothing happened
+  // Grids too large to index are refused when the volume is created.
+  map::VolumeSpec huge = spec;
+  huge.dims_blocks = Eigen::Vector3i(1024, 1024, 1024);
+  EXPECT_THROW(map::Volume(pool, huge, Eigen::Isometry3d::Identity()), InvalidArgument);
+}
+
 TEST_F(Pool, GrowReindexesWithoutMovingVoxels) {
   const map::MapOptions o = options2cm();
   map::VoxelPool pool(ctx(), o);
