@@ -27,7 +27,6 @@ SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrins
       pool_(std::make_unique<map::VoxelPool>(ctx, config.map)),
       preprocessor_(ctx, config.preprocess, intrinsics),
       tracker_(ctx, config.track, intrinsics.width, intrinsics.height),
-      depth_(ctx, intrinsics.width, intrinsics.height),
       timer_(stageNames(), 4096) {
   const map::VolumeSpec spec = map::VolumeSpec::background(config.map);
   background_ = std::make_unique<map::Volume>(
@@ -52,8 +51,7 @@ FrameOutcome SlamSystem::process(const io::Frame& frame) {
   out.first = frames_ == 0;
   {
     ScopedStage s(timer_, "preprocess");
-    preprocessor_.process(frame.depth);
-    depth_.upload(frame.depth, "depth");
+    preprocessor_.process(frame.depth);  // also keeps the raw depth on the device
     ctx_.finish();  // stage times include the device work
   }
   if (!out.first) {
@@ -80,7 +78,7 @@ FrameOutcome SlamSystem::process(const io::Frame& frame) {
   if (!out.lost) {
     ScopedStage s(timer_, "integrate");
     map::IntegrationInput in;
-    in.depth = &depth_;
+    in.depth = &preprocessor_.inputDepth();  // raw depth (metres, NaN invalid)
     in.intrinsics = intrinsics_;
     in.T_world_camera = T_world_camera_;
     out.allocation = background_->fuse(in);

@@ -15,7 +15,6 @@
 #include "cl/context.h"
 #include "common/config.h"
 #include "io/frame.h"
-#include "map/device_image.h"
 #include "map/volume.h"
 #include "map/volume_view.h"
 #include "map/voxel_pool.h"
@@ -71,7 +70,6 @@ class SlamSystem {
   std::unique_ptr<map::Volume> background_;
   track::Preprocessor preprocessor_;
   track::Tracker tracker_;
-  map::DeviceImage depth_;
   StageTimer timer_;
   Eigen::Isometry3d T_world_camera_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d last_motion_ = Eigen::Isometry3d::Identity();  // T_prev_curr of the last frame
