@@ -163,8 +163,16 @@ void TumWriter::write(const Frame& frame) {
                      [](const Detection* a, const Detection* b) { return a->score < b->score; });
     cv::Mat ids = cv::Mat::zeros(frame.depth.size(), CV_16U);
     for (const Detection* d : order) ids.setTo(cv::Scalar(d->id), d->mask >= 0.5f);
+    // A detection hidden entirely under higher-scoring ones has no pixel left in the id image;
+    // listing it would make the folder inconsistent (readers reject ids without pixels).
+    std::vector<bool> present(65536, false);
+    for (int y = 0; y < ids.rows; ++y) {
+      const uint16_t* row = ids.ptr<uint16_t>(y);
+      for (int x = 0; x < ids.cols; ++x) present[row[x]] = true;
+    }
     std::string lines;
     for (const auto& d : *frame.detections) {
+      if (!present[d.id]) continue;
       char line[512];
       std::snprintf(line, sizeof(line), "%d %s %.6f\n", d.id, maskClassToken(d.class_name).c_str(),
                     static_cast<double>(d.score));
