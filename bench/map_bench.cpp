@@ -198,7 +198,7 @@ std::string loadAverage() {
 }
 
 Result run(emf::cl::Context& ctx, const BenchSequence& seq, const Config& cfg, int memory_mb,
-           int error_every, const std::string& mesh_dir) {
+           int error_every, int error_stride, const std::string& mesh_dir) {
   Result r;
   r.config = cfg;
   emf::map::MapOptions o;
@@ -337,8 +337,8 @@ Result run(emf::cl::Context& ctx, const BenchSequence& seq, const Config& cfg, i
   const emf::io::Intrinsics& kf = seq.intrinsics;
   for (size_t i = 0; i < seq.frames.size(); i += static_cast<size_t>(error_every)) {
     const BenchFrame& f = seq.frames[i];
-    for (int y = 2; y < f.depth_m.rows; y += 4) {
-      for (int x = 2; x < f.depth_m.cols; x += 4) {
+    for (int y = error_stride / 2; y < f.depth_m.rows; y += error_stride) {
+      for (int x = error_stride / 2; x < f.depth_m.cols; x += error_stride) {
         const float d = f.depth_m.at<float>(y, x);
         if (std::isnan(d)) continue;
         const Eigen::Vector3d pc((x - kf.cx) / kf.fx * d, (y - kf.cy) / kf.fy * d, d);
@@ -363,7 +363,8 @@ Result run(emf::cl::Context& ctx, const BenchSequence& seq, const Config& cfg, i
 void usage(std::FILE* out) {
   std::fprintf(out,
                "usage: map_bench [--data DIR] [--frames N] [--configs WxH@VOXEL_M,...]\n"
-               "                 [--memory-mb MB] [--error-every K] [--depth-scale S]\n"
+               "                 [--memory-mb MB] [--error-every K] [--error-stride P]\n"
+               "                 [--depth-scale S]\n"
                "                 [--mesh-dir DIR]\n"
                "  --data         TUM-layout folder with associations.txt, groundtruth.txt\n"
                "                 (default ../shared/data/redkitchen-0-299)\n"
@@ -371,6 +372,7 @@ void usage(std::FILE* out) {
                "  --configs      default 640x480@0.01,640x480@0.02,320x240@0.01,320x240@0.02\n"
                "  --memory-mb    voxel pool budget (default 256)\n"
                "  --error-every  measure mesh error on every K-th frame (default 30)\n"
+               "  --error-stride ... on every P-th pixel in x and y (default 4)\n"
                "  --depth-scale  depth PNG units per metre (default 1000, 7-Scenes)\n"
                "  --mesh-dir     also write each mesh as binary PLY there\n");
 }
@@ -381,7 +383,7 @@ int main(int argc, char** argv) {
   std::string data = std::string(EMF_SOURCE_DIR) + "/../shared/data/redkitchen-0-299";
   std::string configs = "640x480@0.01,640x480@0.02,320x240@0.01,320x240@0.02";
   std::string mesh_dir;
-  int frames = 0, memory_mb = 256, error_every = 30;
+  int frames = 0, memory_mb = 256, error_every = 30, error_stride = 4;
   double depth_scale = 1000;
   try {
     for (int i = 1; i < argc; ++i) {
@@ -403,6 +405,8 @@ int main(int argc, char** argv) {
         memory_mb = std::stoi(value());
       } else if (a == "--error-every") {
         error_every = std::max(1, std::stoi(value()));
+      } else if (a == "--error-stride") {
+        error_stride = std::max(1, std::stoi(value()));
       } else if (a == "--depth-scale") {
         depth_scale = std::stod(value());
       } else if (a == "--mesh-dir") {
@@ -434,7 +438,7 @@ int main(int argc, char** argv) {
                 seq.frames.size(), ctx.device().describe().c_str(), loadAverage().c_str());
     std::vector<Result> results;
     for (const Config& c : cfgs) {
-      results.push_back(run(ctx, seq, c, memory_mb, error_every, mesh_dir));
+      results.push_back(run(ctx, seq, c, memory_mb, error_every, error_stride, mesh_dir));
     }
     std::printf("load average after: %s\n\n", loadAverage().c_str());
     std::printf(
@@ -464,9 +468,9 @@ int main(int argc, char** argv) {
         "time), alloc = its allocation part, upload = depth upload;\nraycast per frame from the "
         "same pose (rc_cpu: CPU time); rc_px = pixels with "
         "a surface (last frame); B/vox = (used slots + index grid) / allocated voxels;\n"
-        "err_mm = mean distance of ground-truth depth points (every %d-th frame, every 4th "
+        "err_mm = mean distance of ground-truth depth points (every %d-th frame, every %d-th "
         "pixel) to the mesh, over the cover share within 10 cm.\n",
-        error_every);
+        error_every, error_stride);
     for (const Result& r : results) {
       std::printf(
           "object volume %dx%d @ %gcm: %d blocks, %.2f bytes per voxel (TSDF + Fg/Bg "

@@ -31,6 +31,9 @@
 #define EMF_VOL_NEW 3        // blocks that got a slot (this allocation)
 #define EMF_VOL_REPORT 4     // report: list, allocated, dropped, new (4 ints from here)
 
+// Depths beyond this (metres) are ignored: keeps block coordinates far inside int range.
+#define EMF_MAX_MARK_DEPTH 1000.0f
+
 __kernel void mark_blocks(__global const float* depth, const int width, const int height,
                           const float fx, const float fy, const float cx, const float cy,
                           const float4 r0, const float4 r1, const float4 r2,
@@ -40,7 +43,7 @@ __kernel void mark_blocks(__global const float* depth, const int width, const in
   const int y = get_global_id(1);
   if (x >= width || y >= height) return;
   const float d = depth[y * width + x];
-  if (!emf_is_valid(d) || d <= 0.0f) return;
+  if (!emf_is_valid(d) || d <= 0.0f || d > EMF_MAX_MARK_DEPTH) return;
   const float3 ray = emf_pixel_ray(x, y, fx, fy, cx, cy);
   const float z0 = fmax(d - truncation, 0.0f);
   const float z1 = d + truncation;

@@ -111,10 +111,11 @@ __kernel void raycast_bounds(__global const int* index, const int4 dims, const f
     if (u_hi < 0.0f || v_hi < 0.0f || u_lo > (float)(width - 1) || v_lo > (float)(height - 1)) {
       return;
     }
-    x0 = max(0, (int)floor(u_lo));
-    x1 = min(width - 1, (int)ceil(u_hi));
-    y0 = max(0, (int)floor(v_lo));
-    y1 = min(height - 1, (int)ceil(v_hi));
+    // Here u_hi >= 0 and u_lo <= width - 1: clamping first keeps the conversions in range.
+    x0 = (int)floor(fmax(u_lo, 0.0f));
+    x1 = (int)ceil(fmin(u_hi, (float)(width - 1)));
+    y0 = (int)floor(fmax(v_lo, 0.0f));
+    y1 = (int)ceil(fmin(v_hi, (float)(height - 1)));
   }
   const int lo_bits = as_int(z_lo);
   const int hi_bits = as_int(z_hi);

@@ -13,7 +13,8 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 
 bool valid(float v) { return !std::isnan(v); }
 
-constexpr int kRayTileReference = 16;  // EMF_RAY_TILE / kRayTile
+constexpr int kRayTileReference = 16;      // EMF_RAY_TILE / kRayTile
+constexpr float kMaxMarkDepthM = 1000.0f;  // EMF_MAX_MARK_DEPTH
 
 bool inGrid(const Eigen::Vector3i& c, const Eigen::Vector3i& dims) {
   return c.x() >= 0 && c.y() >= 0 && c.z() >= 0 && c.x() < dims.x() && c.y() < dims.y() &&
@@ -40,7 +41,7 @@ std::vector<uint8_t> markBlocksReference(const cv::Mat& depth_m, const CameraF& 
   for (int y = 0; y < cam.height; ++y) {
     for (int x = 0; x < cam.width; ++x) {
       const float d = depth_m.at<float>(y, x);
-      if (!valid(d) || d <= 0.0f) continue;
+      if (!valid(d) || d <= 0.0f || d > kMaxMarkDepthM) continue;
       const Eigen::Vector3f ray = pixelRay(x, y, cam);
       const float z0 = std::fmax(d - truncation_m, 0.0f);
       const float z1 = d + truncation_m;
@@ -218,10 +219,11 @@ TileRanges tileRangesReference(const VolumeHostData& vol, const CameraF& cam, co
           v_lo > static_cast<float>(cam.height - 1)) {
         continue;
       }
-      x0 = std::max(0, static_cast<int>(std::floor(u_lo)));
-      x1 = std::min(cam.width - 1, static_cast<int>(std::ceil(u_hi)));
-      y0 = std::max(0, static_cast<int>(std::floor(v_lo)));
-      y1 = std::min(cam.height - 1, static_cast<int>(std::ceil(v_hi)));
+      // Here u_hi >= 0 and u_lo <= width - 1: clamping first keeps the conversions in range.
+      x0 = static_cast<int>(std::floor(std::fmax(u_lo, 0.0f)));
+      x1 = static_cast<int>(std::ceil(std::fmin(u_hi, static_cast<float>(cam.width - 1))));
+      y0 = static_cast<int>(std::floor(std::fmax(v_lo, 0.0f)));
+      y1 = static_cast<int>(std::ceil(std::fmin(v_hi, static_cast<float>(cam.height - 1))));
     }
     for (int ty = y0 / kRayTileReference; ty <= y1 / kRayTileReference; ++ty) {
       for (int tx = x0 / kRayTileReference; tx <= x1 / kRayTileReference; ++tx) {
