@@ -3,16 +3,20 @@
 // errors, on synthetic frames with known motion and on the real TUM fr1/xyz pairs; plus the
 // preprocessing kernel and one accumulation pass. Figures only, never pass/fail.
 //
-// Usage: track_bench [--data DIR] [--trials N] [--quick] [--kernels-only]
+// Usage: track_bench [--data DIR] [--trials N] [--quick] [--kernels-only] [--sequences]
+//   --sequences: only the frame-to-frame statistics on redkitchen and fr3-cabinet-keyframes.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
+#include <fstream>
 #include <functional>
+#include <map>
 #include <opencv2/imgproc.hpp>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -277,6 +281,92 @@ void kernels(emf::cl::Context& ctx, const std::string& data, int repeats) {
   }
 }
 
+// Frame-to-frame statistics over real sequences: fuses frame i into a fresh volume (CPU
+// reference fusion, 1 cm), tracks frame i + gap from identity with the default options, and
+// prints the errors against the ground truth and the loss-rule figures (for the thresholds).
+struct SequenceFrame {
+  std::string depth_path;
+  Eigen::Isometry3d T_world_camera;
+};
+
+std::vector<SequenceFrame> readSequence(const std::string& dir) {
+  std::vector<SequenceFrame> frames;
+  std::ifstream assoc(dir + "/associations.txt"), gt(dir + "/groundtruth.txt");
+  std::map<std::string, Eigen::Isometry3d> poses;
+  std::string line;
+  while (std::getline(gt, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream in(line);
+    std::string ts;
+    double tx, ty, tz, qx, qy, qz, qw;
+    in >> ts >> tx >> ty >> tz >> qx >> qy >> qz >> qw;
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::Quaterniond(qw, qx, qy, qz).normalized().toRotationMatrix();
+    T.translation() << tx, ty, tz;
+    poses[ts] = T;
+  }
+  while (std::getline(assoc, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream in(line);
+    std::string t_rgb, rgb, t_depth, depth;
+    in >> t_rgb >> rgb >> t_depth >> depth;
+    const auto it = poses.find(t_depth);
+    if (it != poses.end()) frames.push_back({dir + "/" + depth, it->second});
+  }
+  return frames;
+}
+
+void sequence(emf::cl::Context& ctx, const std::string& name, const std::string& dir,
+              double depth_scale, const emf::io::Intrinsics& k, int gap, int step) {
+  const std::vector<SequenceFrame> frames = readSequence(dir);
+  std::printf(
+      "\nsequence %s: %zu frames, pairs (i, i+%d) every %d frames, single-frame volume "
+      "(1 cm), start at identity, default options\n",
+      name.c_str(), frames.size(), gap, step);
+  std::printf("  %5s %9s %9s %9s %9s %6s %6s %7s %6s %9s %s\n", "pair", "gt mm", "gt deg", "err mm",
+              "err deg", "valid", "inl", "invcond", "iters", "ms", "lost");
+  emf::track::Preprocessor pre(ctx, emf::track::PreprocessOptions{}, k);
+  emf::track::Tracker tracker(ctx, TrackOptions{}, k.width, k.height);
+  std::vector<double> ms, valid, inl, cond;
+  int lost = 0, silent_bad = 0, pairs = 0;
+  for (size_t i = 0; i + gap < frames.size(); i += step) {
+    const cv::Mat prev = emf::test::readDepthPng(frames[i].depth_path, depth_scale);
+    const cv::Mat curr = emf::test::readDepthPng(frames[i + gap].depth_path, depth_scale);
+    const Eigen::Isometry3d gt =
+        frames[i].T_world_camera.inverse() * frames[i + gap].T_world_camera;
+    emf::test::HostVolume host(Eigen::Vector3i(64, 64, 64), 0.01f, 0.1f);
+    Eigen::Isometry3d T_vp = Eigen::Isometry3d::Identity();
+    T_vp.translation() << 2.56, 2.56, 0.0;
+    emf::test::fuseDepth(&host, prev, k, T_vp, 64.0f);
+    const emf::test::DeviceVolume vol = emf::test::upload(ctx, host);
+    pre.process(curr);
+    const auto t0 = Clock::now();
+    const TrackResult r = tracker.track(vol.view, pre.vertexMap().get(), nullptr, T_vp);
+    ms.push_back(msSince(t0));
+    const Eigen::Isometry3d e = gt.inverse() * (T_vp.inverse() * r.T_volume_camera);
+    const double e_mm = e.translation().norm() * 1000, e_deg = emf::track::rotationAngle(e) / kDeg;
+    valid.push_back(r.valid_fraction);
+    inl.push_back(r.inlier_ratio);
+    cond.push_back(r.inverse_condition);
+    lost += r.lost ? 1 : 0;
+    // A wrong pose that is not flagged: more than 2 cm / 2 deg off the ground truth.
+    if (!r.lost && (e_mm > 20.0 || e_deg > 2.0)) ++silent_bad;
+    ++pairs;
+    std::printf("  %5zu %9.1f %9.2f %9.1f %9.2f %6.3f %6.3f %7.4f %6d %9.1f %s\n", i,
+                gt.translation().norm() * 1000, emf::track::rotationAngle(gt) / kDeg, e_mm, e_deg,
+                r.valid_fraction, r.inlier_ratio, r.inverse_condition, r.iterations, ms.back(),
+                r.lost ? emf::track::trackLossName(r.loss) : "");
+  }
+  auto mn = [](const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); };
+  std::printf(
+      "  %s: %d pairs, %d lost, %d wrong (>2 cm / 2 deg) but not flagged; min/median "
+      "valid %.3f/%.3f inliers %.3f/%.3f invcond %.4f/%.4f; ms median %.1f\n",
+      name.c_str(), pairs, lost, silent_bad, mn(valid), median(valid), mn(inl), median(inl),
+      mn(cond), median(cond), median(ms));
+  std::printf("track_bench sequence=%s pairs=%d lost=%d silent_wrong=%d ms=%.1f\n", name.c_str(),
+              pairs, lost, silent_bad, median(ms));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -284,6 +374,7 @@ int main(int argc, char** argv) {
   int trials = 6;
   bool quick = false;
   bool kernels_only = false;
+  bool sequences_only = false;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--data") && i + 1 < argc) {
       data = argv[++i];
@@ -293,15 +384,26 @@ int main(int argc, char** argv) {
       quick = true;
     } else if (!std::strcmp(argv[i], "--kernels-only")) {
       kernels_only = true;
+    } else if (!std::strcmp(argv[i], "--sequences")) {
+      sequences_only = true;
     } else {
       std::fprintf(stderr,
-                   "usage: track_bench [--data DIR] [--trials N] [--quick] [--kernels-only]\n");
+                   "usage: track_bench [--data DIR] [--trials N] [--quick] [--kernels-only] "
+                   "[--sequences]\n");
       return 2;
     }
   }
   try {
     emf::cl::Context ctx(emf::cl::ClOptions{});
     std::printf("track_bench on %s\n", ctx.device().describe().c_str());
+    if (sequences_only) {
+      emf::io::Intrinsics kitchen{585, 585, 320, 240, 640, 480};
+      sequence(ctx, "redkitchen", data + "/redkitchen-0-299", 1000.0, kitchen, 5, 15);
+      emf::io::Intrinsics fr3{535.4, 539.2, 320.1, 247.6, 640, 480};
+      sequence(ctx, "fr3-cabinet-keyframes", data + "/tum-fr3-cabinet-keyframes", 5000.0, fr3, 1,
+               1);
+      return 0;
+    }
     kernels(ctx, data, quick ? 5 : 30);
     if (kernels_only) return 0;
     syntheticScene(ctx, "room-320-2cm", 0.02f, 320, 0.05, 5.0, trials);

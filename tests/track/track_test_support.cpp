@@ -129,12 +129,19 @@ DeviceVolume upload(cl::Context& ctx, const HostVolume& vol) {
 }
 
 float AnalyticScene::sdf(const Eigen::Vector3f& x) const {
+  // Plain float arithmetic: this runs for every voxel of the test volumes, also in Debug builds.
+  const float px = x.x(), py = x.y(), pz = x.z();
   float s = std::numeric_limits<float>::max();
-  for (const Plane& p : planes) s = std::min(s, p.normal.dot(x) - p.offset);
+  for (const Plane& p : planes) {
+    s = std::min(s, p.normal.x() * px + p.normal.y() * py + p.normal.z() * pz - p.offset);
+  }
   for (const Box& b : boxes) {
-    const Eigen::Vector3f q = (x - b.center).cwiseAbs() - b.half_extent;
-    const float outside = q.cwiseMax(0.0f).norm();
-    const float inside = std::min(q.maxCoeff(), 0.0f);
+    const float qx = std::abs(px - b.center.x()) - b.half_extent.x();
+    const float qy = std::abs(py - b.center.y()) - b.half_extent.y();
+    const float qz = std::abs(pz - b.center.z()) - b.half_extent.z();
+    const float ox = std::max(qx, 0.0f), oy = std::max(qy, 0.0f), oz = std::max(qz, 0.0f);
+    const float outside = std::sqrt(ox * ox + oy * oy + oz * oz);
+    const float inside = std::min(std::max(qx, std::max(qy, qz)), 0.0f);
     s = std::min(s, outside + inside);
   }
   return s;

@@ -147,25 +147,28 @@ TEST_F(TrackerTest, AccumulationMatchesReferenceSynthetic) {
   // A pose 3 cm / 3 degrees off: inliers and Huber outliers.
   const Eigen::Isometry3d T = perturb(room_->T_volume_camera_gt, rng, 0.03, 3 * kDeg);
   const double delta = 0.2 * room_->host->truncation_m;
+  // References computed once (they are slow in unoptimised sanitizer builds).
+  const NormalEquations ref_s1 =
+      accumulateReference(room_->host->view(), frame.vertex, q, 1, T, delta);
+  const NormalEquations ref_s3 =
+      accumulateReference(room_->host->view(), frame.vertex, q, 3, T, delta);
+  const NormalEquations ref_ones =
+      accumulateReference(room_->host->view(), frame.vertex, cv::Mat(), 2, T, delta);
+  EXPECT_GT(ref_s1.inliers, ref_s1.valid / 4);
+  EXPECT_LT(ref_s1.inliers, ref_s1.valid);
   for (const std::string reduction : {"host", "device"}) {
     TrackOptions o;
     o.final_reduction = reduction;
     Tracker tracker(ctx(), o, k.width, k.height);
     for (int stride : {1, 3}) {
       SCOPED_TRACE(reduction + " reduction, stride " + std::to_string(stride));
-      const NormalEquations ref =
-          accumulateReference(room_->host->view(), frame.vertex, q, stride, T, delta);
-      EXPECT_GT(ref.inliers, ref.valid / 4);
-      EXPECT_LT(ref.inliers, ref.valid);
       const NormalEquations dev =
           tracker.evaluate(room_->device.view, vertex.get(), qbuf.get(), T, stride);
-      expectNormalEquationsNear(dev, ref);
+      expectNormalEquationsNear(dev, stride == 1 ? ref_s1 : ref_s3);
     }
     // q = nullptr means all ones.
-    const NormalEquations ref1 =
-        accumulateReference(room_->host->view(), frame.vertex, cv::Mat(), 2, T, delta);
     expectNormalEquationsNear(tracker.evaluate(room_->device.view, vertex.get(), nullptr, T, 2),
-                              ref1);
+                              ref_ones);
   }
 }
 
@@ -180,7 +183,7 @@ TEST_F(TrackerTest, CostChangeOverCommonPixelsMatchesReference) {
   const Eigen::Isometry3d T2 = perturb(T1, rng, 0.01, 1 * kDeg);
   const double delta = 0.2 * room_->host->truncation_m;
   Tracker tracker(ctx(), TrackOptions{}, k.width, k.height);
-  for (int stride : {1, 2}) {
+  for (int stride : {2, 3}) {  // (stride 1 is covered above; keeps sanitizer runs short)
     SCOPED_TRACE("stride " + std::to_string(stride));
     cv::Mat cost1, cost2;
     accumulateReference(room_->host->view(), frame.vertex, cv::Mat(), stride, T1, delta, nullptr,
@@ -280,17 +283,20 @@ TEST_F(TrackerTest, GradientOfReferenceCostMatchesFiniteDifferences) {
       if (inside && std::abs(room_->scene.sdf(x)) < 0.1f) q.at<float>(v, u) = 1.0f;
     }
   }
-  const NormalEquations ne = accumulateReference(room_->host->view(), frame.vertex, q, 1, T, delta);
-  ASSERT_GT(ne.valid, 20000);
+  // Every 3rd pixel keeps the 13 reference passes short in unoptimised (sanitizer) builds.
+  const int stride = 3;
+  const NormalEquations ne =
+      accumulateReference(room_->host->view(), frame.vertex, q, stride, T, delta);
+  ASSERT_GT(ne.valid, 3000);
   ASSERT_GT(ne.valid - ne.inliers, 100) << "the pose must produce Huber outliers too";
   const double h = 1e-4;
   const double g_scale = ne.g.cwiseAbs().maxCoeff();
   for (int c = 0; c < 6; ++c) {
     Vector6d d = Vector6d::Zero();
     d(c) = h;
-    const NormalEquations np = accumulateReference(room_->host->view(), frame.vertex, q, 1,
+    const NormalEquations np = accumulateReference(room_->host->view(), frame.vertex, q, stride,
                                                    applyLeftIncrement(d, T), delta);
-    const NormalEquations nm = accumulateReference(room_->host->view(), frame.vertex, q, 1,
+    const NormalEquations nm = accumulateReference(room_->host->view(), frame.vertex, q, stride,
                                                    applyLeftIncrement(-d, T), delta);
     ASSERT_EQ(np.valid, ne.valid);
     ASSERT_EQ(nm.valid, ne.valid);
@@ -499,10 +505,12 @@ TEST_F(TrackerTest, RealPairAccumulationMatchesReference) {
   cl::MemHandle vertex =
       ctx().buffer(CL_MEM_READ_ONLY, frame.vertex.total() * sizeof(cv::Vec4f), frame.vertex.data);
   Tracker tracker(ctx(), TrackOptions{}, 640, 480);
-  const NormalEquations ref = accumulateReference(p.host->view(), frame.vertex, cv::Mat(), 1,
+  // Every 2nd pixel (the synthetic test covers stride 1) keeps the reference short in
+  // unoptimised sanitizer builds.
+  const NormalEquations ref = accumulateReference(p.host->view(), frame.vertex, cv::Mat(), 2,
                                                   p.T_volume_prev, 0.2 * p.host->truncation_m);
   expectNormalEquationsNear(
-      tracker.evaluate(p.device.view, vertex.get(), nullptr, p.T_volume_prev, 1), ref);
+      tracker.evaluate(p.device.view, vertex.get(), nullptr, p.T_volume_prev, 2), ref);
 }
 
 TEST_F(TrackerTest, RealPairRecoversGroundTruthMotion) {
