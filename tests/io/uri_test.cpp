@@ -79,9 +79,13 @@ TEST(UriQuery, OverridesSourceOptionsWithConfigRanges) {
 TEST(OpenSource, DispatchErrorsSayWhatToDo) {
   const SourceOptions o;
   expectErrorContaining([&] { openSource("foo:/x", o); }, {"unknown scheme 'foo:'", "tum:<dir>"});
-  expectErrorContaining([&] { openSource("synth:room?frames=3", o); },
-                        {"'synth:' is not built in this binary"});
-  expectErrorContaining([&] { openSource("v4l2:/dev/video0", o); }, {"not built"});
+  // synth: and the sensors are dispatched to their modules, which name what is wrong.
+  expectErrorContaining([&] { openSource("synth:nosuchpreset", o); },
+                        {"unknown preset 'nosuchpreset'", "room"});
+  expectErrorContaining([&] { openSource("synth:", o); }, {"missing preset name"});
+  EXPECT_EQ(openSource("synth:room?frames=3&width=64&height=48", o)->size(), 3);
+  expectErrorContaining([&] { openSource("v4l2:/dev/emf-no-such-video", o); },
+                        {"/dev/emf-no-such-video"});
   expectErrorContaining([&] { openSource("tum:", o); }, {"missing dataset folder"});
   expectErrorContaining([&] { openSource("tum:/nonexistent-emf-folder", o); },
                         {"'/nonexistent-emf-folder' does not exist"});
