@@ -26,6 +26,7 @@
 #include "cl/context.h"
 #include "common/error.h"
 #include "common/log.h"
+#include "io/frame_source.h"
 #include "map/device_image.h"
 #include "map/mesh.h"
 #include "map/mesh_distance.h"
@@ -39,9 +40,7 @@ using emf::map::kBlockSize;
 using emf::map::kBlockVoxels;
 using Clock = std::chrono::steady_clock;
 
-// ---- Private TUM-layout loader -------------------------------------------------------------
-// TODO(lead): replace with io::openSource("tum:...") once the dataset reader lands; this only
-// reads what the benchmark needs (associations.txt, groundtruth.txt, calibration.txt, depth PNGs).
+// ---- The sequence, read through io::openSource("tum:...") -----------------------------------
 struct BenchFrame {
   double timestamp = 0;
   cv::Mat depth_m;  // CV_32F metres, NaN invalid, full resolution
@@ -53,75 +52,29 @@ struct BenchSequence {
   std::vector<BenchFrame> frames;
 };
 
+/// Frames with ground truth of the TUM folder `dir` (depth scale as given; intrinsics from its
+/// calibration.txt), at most `max_frames` (0 = all).
 BenchSequence loadTumSequence(const std::string& dir, double depth_scale, int max_frames) {
+  emf::io::SourceOptions options;
+  options.depth_scale = depth_scale;
+  options.max_frames = max_frames > 0 ? max_frames : 0;
+  auto source = emf::io::openSource("tum:" + dir, options);
   BenchSequence seq;
-  {
-    std::ifstream calib(dir + "/calibration.txt");
-    seq.intrinsics = {585, 585, 320, 240, 640, 480};
-    if (calib) {
-      calib >> seq.intrinsics.fx >> seq.intrinsics.fy >> seq.intrinsics.cx >> seq.intrinsics.cy >>
-          seq.intrinsics.width >> seq.intrinsics.height;
-    }
+  seq.intrinsics = source->intrinsics();
+  emf::io::Frame f;
+  while ((max_frames <= 0 || static_cast<int>(seq.frames.size()) < max_frames) && source->next(f)) {
+    if (!f.T_world_camera_gt) continue;  // map_bench integrates with ground-truth poses
+    BenchFrame b;
+    b.timestamp = f.timestamp;
+    b.depth_m = f.depth.clone();
+    b.T_world_camera = *f.T_world_camera_gt;
+    seq.frames.push_back(std::move(b));
   }
-  std::vector<std::pair<double, Eigen::Isometry3d>> gt;
-  {
-    std::ifstream in(dir + "/groundtruth.txt");
-    if (!in) throw emf::IoError(dir + "/groundtruth.txt: cannot open (map_bench needs poses)");
-    std::string line;
-    int line_no = 0;
-    while (std::getline(in, line)) {
-      ++line_no;
-      if (line.empty() || line[0] == '#') continue;
-      std::istringstream ls(line);
-      double t, tx, ty, tz, qx, qy, qz, qw;
-      if (!(ls >> t >> tx >> ty >> tz >> qx >> qy >> qz >> qw)) {
-        throw emf::IoError(dir + "/groundtruth.txt:" + std::to_string(line_no) +
-                           ": expected 'timestamp tx ty tz qx qy qz qw'");
-      }
-      Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-      T.linear() = Eigen::Quaterniond(qw, qx, qy, qz).normalized().toRotationMatrix();
-      T.translation() = Eigen::Vector3d(tx, ty, tz);
-      gt.emplace_back(t, T);
-    }
-  }
-  std::ifstream assoc(dir + "/associations.txt");
-  if (!assoc) throw emf::IoError(dir + "/associations.txt: cannot open");
-  std::string line;
-  int line_no = 0;
-  while (std::getline(assoc, line) &&
-         (max_frames <= 0 || static_cast<int>(seq.frames.size()) < max_frames)) {
-    ++line_no;
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream ls(line);
-    double t_rgb, t_depth;
-    std::string rgb, depth;
-    if (!(ls >> t_rgb >> rgb >> t_depth >> depth)) {
-      throw emf::IoError(dir + "/associations.txt:" + std::to_string(line_no) +
-                         ": expected 'rgb_time rgb_file depth_time depth_file'");
-    }
-    if (depth.find("depth") == std::string::npos) {  // depth listed first
-      std::swap(rgb, depth);
-      std::swap(t_rgb, t_depth);
-    }
-    const auto best = std::min_element(gt.begin(), gt.end(), [&](const auto& a, const auto& b) {
-      return std::abs(a.first - t_depth) < std::abs(b.first - t_depth);
-    });
-    if (best == gt.end() || std::abs(best->first - t_depth) > 0.02) continue;
-    const cv::Mat raw = cv::imread(dir + "/" + depth, cv::IMREAD_UNCHANGED);
-    if (raw.type() != CV_16UC1) {
-      throw emf::IoError(dir + "/" + depth + ": not a 16-bit depth PNG (associations.txt:" +
-                         std::to_string(line_no) + ")");
-    }
-    BenchFrame f;
-    f.timestamp = t_depth;
-    raw.convertTo(f.depth_m, CV_32F, 1.0 / depth_scale);
-    f.depth_m.setTo(std::numeric_limits<float>::quiet_NaN(), raw == 0);
-    f.T_world_camera = best->second;
-    seq.frames.push_back(std::move(f));
+  if (seq.frames.empty()) {
+    throw emf::IoError(dir + ": no frames with ground-truth poses (map_bench needs them)");
   }
   return seq;
 }
-// ---- end of the private loader --------------------------------------------------------------
 
 /// 2x2 down-sampling of depth: mean of the valid samples within 3 cm of the nearest one, so
 /// depth edges are not blended into flying pixels. Pixel centres match Intrinsics::scaled.
