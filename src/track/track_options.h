@@ -43,6 +43,9 @@ struct TrackOptions {
   /// Early exit: stop once an accepted increment is below this norm (metres and radians mixed,
   /// 1e-5 = 10 um / 10 urad). 0 = only the LM criteria (lm_eps).
   double early_exit_step = 1e-5;
+  /// Step extrapolation: an accepted LM step whose cost decrease exceeds 1.5x the model's
+  /// prediction doubles the scale of the next steps, up to this factor (1 = plain LM).
+  double max_step_scale = 8.0;
   /// Where the per-work-group partial sums are added up: "host" or "device" (second kernel).
   std::string final_reduction = "host";
 
@@ -55,6 +58,9 @@ struct TrackOptions {
   /// Lost when the inverse condition number of the balanced Hessian (rotation block scaled to
   /// the translation block's trace) is below this: the geometry does not constrain all 6 DoF.
   double min_inverse_condition = 1e-3;
+  /// Lost when the finest level used all max_iterations without converging (large motion or a
+  /// flat valley: the estimate is not trusted).
+  bool lost_if_not_converged = true;
   /// Lost when the estimate moved farther than this from the initial pose in one call (a
   /// wrong basin: real cameras move a few cm per frame).
   double max_motion_m = 0.3;
@@ -76,6 +82,8 @@ struct TrackOptions {
               "LM iterations per coarse level");
     b.real("early_exit_step", early_exit_step, 0.0, 1.0, "m|rad",
            "stop when an accepted increment is below this norm (0 = off)");
+    b.real("max_step_scale", max_step_scale, 1.0, 64.0, "",
+           "LM step extrapolation limit where the cost falls faster than predicted (1 = off)");
     b.choice("final_reduction", final_reduction, {"host", "device"},
              "where the per-work-group partial sums are added");
     b.real("min_valid_fraction", min_valid_fraction, 0.0, 1.0, "",
@@ -84,6 +92,8 @@ struct TrackOptions {
            "lost below this fraction of map points with |psi| <= Huber delta");
     b.real("min_inverse_condition", min_inverse_condition, 0.0, 1.0, "",
            "lost below this inverse condition number of the balanced 6x6 Hessian");
+    b.boolean("lost_if_not_converged", lost_if_not_converged,
+              "lost when the finest level ends at max_iterations without converging");
     b.real("max_motion_m", max_motion_m, 0.0, 100.0, "m",
            "lost when the pose moved farther than this from its initial value");
     b.real("max_motion_deg", max_motion_deg, 0.0, 180.0, "deg",

@@ -4,8 +4,6 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <limits>
 #include <sstream>
 
@@ -81,6 +79,8 @@ const char* trackLossName(TrackLoss loss) {
       return "few_inliers";
     case TrackLoss::kDegenerate:
       return "degenerate";
+    case TrackLoss::kNotConverged:
+      return "not_converged";
   }
   return "unknown";
 }
@@ -265,23 +265,29 @@ Tracker::LevelResult Tracker::runLevel(const map::VolumeDeviceView& volume, cl_m
   double nu = options_.lm_nu;
   res.final_damping = tau;
   if (!(mu > 0.0) || !std::isfinite(mu)) return res;  // no gradient information at all
+  // Step extrapolation (max_step_scale > 1): where the cost falls much faster than the model
+  // predicts (Huber outliers and truncated points make the IRLS Hessian too stiff far from the
+  // minimum), the LM step is scaled by up to max_step_scale, doubling per such step; any
+  // disappointing or rejected extrapolated step falls back to the plain LM step.
+  double scale = 1.0;
   while (res.iterations < max_iterations) {
     if (g.cwiseAbs().maxCoeff() <= eps) {
       res.converged = true;
       break;
     }
-    const Vector6d h = (H + mu * Matrix6d::Identity()).ldlt().solve(-g);
-    if (!h.allFinite()) break;
-    if (h.norm() <= eps) {
+    const Vector6d h_lm = (H + mu * Matrix6d::Identity()).ldlt().solve(-g);
+    if (!h_lm.allFinite()) break;
+    if (h_lm.norm() <= eps) {
       res.converged = true;
       break;
     }
+    const Vector6d h = scale * h_lm;
     const Eigen::Isometry3d T_new = applyLeftIncrement(h, *T);
     const NormalEquations ne = evaluateCandidate(volume, vertex_map, q, T_new, stride, true);
     ++res.iterations;
     const double actual = -ne.cost_change * inv_max_weight;
-    const double predicted = 0.5 * h.dot(mu * h - g);
-    const double gain = actual / predicted;
+    const double predicted = 0.5 * h_lm.dot(mu * h_lm - g);  // model decrease of the LM step
+    const double gain = actual / predicted / scale;
     const double max_diag = H.diagonal().maxCoeff();
     if (ne.valid > 0 && predicted > 0.0 && gain > 0.0) {
       *T = T_new;
@@ -292,6 +298,10 @@ Tracker::LevelResult Tracker::runLevel(const map::VolumeDeviceView& volume, cl_m
       const double c = 2.0 * gain - 1.0;
       mu *= std::max(1.0 / 3.0, 1.0 - c * c * c);
       nu = options_.lm_nu;
+      scale =
+          gain > 1.5 ? std::min(2.0 * scale, options_.max_step_scale) : (gain < 0.75 ? 1.0 : scale);
+    } else if (scale > 1.0) {
+      scale = 1.0;  // retry the plain LM step with the same damping
     } else {
       mu *= nu;
       nu *= 2.0;
@@ -370,6 +380,10 @@ TrackResult Tracker::track(const map::VolumeDeviceView& volume, cl_mem vertex_ma
     why << "degenerate geometry: inverse condition number " << result.inverse_condition
         << " of the balanced Hessian is below track.min_inverse_condition "
         << options_.min_inverse_condition;
+  } else if (options_.lost_if_not_converged && !finest_converged) {
+    result.loss = TrackLoss::kNotConverged;
+    why << "not converged after track.max_iterations " << options_.max_iterations
+        << " iterations (track.lost_if_not_converged)";
   }
   result.lost = result.loss != TrackLoss::kNone;
   result.loss_reason = why.str();

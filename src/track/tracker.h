@@ -15,6 +15,10 @@
 // Stops when |g|_inf or |h| <= lm_eps, after max_iterations, or (early_exit_step > 0) once
 // |h| < early_exit_step while mu <= max diag(H). Optional coarse levels run first on every
 // 2^l-th pixel (pixel_stride x 2^l), each continuing with the damping the previous one reached.
+// Step extrapolation (max_step_scale > 1): while accepted steps decrease the cost by more than
+// 1.5x the model's prediction, the next LM steps are scaled by 2, 4, .. up to max_step_scale
+// (the IRLS Hessian is too stiff far from the minimum); a disappointing or rejected scaled step
+// falls back to scale 1 without changing the damping.
 //
 // Tracking loss (TrackResult::lost), checked in this order at the final pose of the finest level:
 //   no pixel with valid depth                          -> kNoDepth
@@ -22,6 +26,7 @@
 //   |T_init^-1 T| > max_motion_m or max_motion_deg     -> kLargeMotion
 //   inliers / valid < min_inlier_ratio                 -> kFewInliers
 //   balancedInverseCondition(H) < min_inverse_condition -> kDegenerate
+//   finest level ended at max_iterations (lost_if_not_converged) -> kNotConverged
 // A lost result still carries the estimate; the caller keeps its last good pose and does not
 // integrate the frame.
 #pragma once
@@ -74,6 +79,7 @@ enum class TrackLoss {
   kFewValidPoints,  // too few points landed on the observed map (min_valid_fraction)
   kLargeMotion,     // the estimate left the initial pose's neighbourhood (max_motion_*)
   kFewInliers,      // residuals too large for too many points (min_inlier_ratio)
+  kNotConverged,    // the finest level hit max_iterations (lost_if_not_converged)
   kDegenerate,      // the geometry does not constrain all 6 DoF (min_inverse_condition)
 };
 const char* trackLossName(TrackLoss loss);
