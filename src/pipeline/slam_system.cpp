@@ -20,7 +20,22 @@ const std::vector<std::string>& SlamSystem::stageNames() {
   return kStages;
 }
 
-SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrinsics& intrinsics)
+const char* objectStateName(ObjectState state) {
+  switch (state) {
+    case ObjectState::kTracked:
+      return "tracked";
+    case ObjectState::kLost:
+      return "lost";
+    case ObjectState::kInvisible:
+      return "invisible";
+    case ObjectState::kDeleted:
+      return "deleted";
+  }
+  return "?";
+}
+
+SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrinsics& intrinsics,
+                       const std::string& /*source_uri*/)
     : ctx_(ctx),
       config_(config),
       intrinsics_(intrinsics),
@@ -52,7 +67,7 @@ FrameOutcome SlamSystem::process(const io::Frame& frame) {
   {
     ScopedStage s(timer_, "preprocess");
     preprocessor_.process(frame.depth);  // also keeps the raw depth on the device
-    ctx_.finish();  // stage times include the device work
+    ctx_.finish();                       // stage times include the device work
   }
   if (!out.first) {
     ScopedStage s(timer_, "track");
@@ -87,6 +102,19 @@ FrameOutcome SlamSystem::process(const io::Frame& frame) {
   timer_.endFrame();
   ++frames_;
   return out;
+}
+
+std::vector<ObjectOutcome> SlamSystem::objects() const { return {}; }
+
+const map::Volume* SlamSystem::volume(int id) const {
+  return id == 0 ? background_.get() : nullptr;
+}
+
+std::vector<map::RenderItem> SlamSystem::renderItems() const {
+  map::RenderItem bg;
+  bg.volume = background_.get();
+  bg.id = 0;
+  return {bg};
 }
 
 }  // namespace emf::pipeline
