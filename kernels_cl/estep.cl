@@ -1,0 +1,64 @@
+// E-step of the EM loop (METHOD.md step 2): per pixel u and volume i, the likelihood
+//   p(u | i) = alpha / (2 sigma) * exp(-|psi_i(T_i p(u))| / sigma) * p_fg,i + (1 - alpha) p_U
+// when T_i p(u) lies inside volume i's grid, else 0; then q_i(u) = p(u | i) / sum_j p(u | j).
+// Inside the grid but where the SDF is not observed (NaN sample), |psi| = truncation: the
+// volume neither claims nor rejects the point (the authors' volumes start at +truncation).
+// p_fg = 1 for volumes without counts (the background).
+//
+// Host sequence per E-step: estep_likelihood once per volume (first = 1 for the first volume,
+// which initialises the running sum, the best likelihood and the residual), then
+// estep_normalize once per volume. Pixels without a valid vertex get q = 0 for every volume
+// and residual NaN; pixels no volume contains also get q = 0.
+#include "map_common.clh"
+
+__kernel void estep_likelihood(__global const float4* vertex, const int count, const float4 r0,
+                               const float4 r1, const float4 r2, __global const int* index,
+                               __global const int* count_index, const int has_counts,
+                               const int4 dims, __global const short2* voxels,
+                               const float voxel_size, const float truncation,
+                               const float sigma, const float alpha, const float p_uniform,
+                               const int first, __global float* likelihood,
+                               __global float* sum, __global float* best,
+                               __global float* residual) {
+  const int u = get_global_id(0);
+  if (u >= count) return;
+  const float4 p4 = vertex[u];
+  float lik = 0.0f;
+  float abs_psi = NAN;
+  if (p4.w != 0.0f) {
+    const float3 p = emf_transform(r0, r1, r2, p4.xyz);
+    const float3 extent = (float3)((float)(dims.x * EMF_BLOCK), (float)(dims.y * EMF_BLOCK),
+                                   (float)(dims.z * EMF_BLOCK)) * voxel_size;
+    if (p.x >= 0.0f && p.y >= 0.0f && p.z >= 0.0f && p.x < extent.x && p.y < extent.y &&
+        p.z < extent.z) {
+      float weight = 0.0f;
+      float3 gradient;
+      const float psi =
+          emf_sample_sdf(index, dims, voxels, voxel_size, truncation, p, &weight, &gradient);
+      abs_psi = emf_is_valid(psi) ? fabs(psi) : truncation;
+      const float pfg =
+          has_counts ? emf_sample_pfg(count_index, dims, voxels, voxel_size, p) : 1.0f;
+      lik = alpha / (2.0f * sigma) * exp(-abs_psi / sigma) * pfg + (1.0f - alpha) * p_uniform;
+    }
+  }
+  likelihood[u] = lik;
+  if (first) {
+    sum[u] = lik;
+    best[u] = lik;
+    residual[u] = lik > 0.0f ? abs_psi : NAN;
+  } else {
+    sum[u] += lik;
+    if (lik > best[u]) {
+      best[u] = lik;
+      residual[u] = abs_psi;
+    }
+  }
+}
+
+/// q_i(u) = likelihood_i(u) / sum(u) in place (0 where the sum is 0).
+__kernel void estep_normalize(__global float* q, __global const float* sum, const int count) {
+  const int u = get_global_id(0);
+  if (u >= count) return;
+  const float s = sum[u];
+  q[u] = s > 0.0f ? q[u] / s : 0.0f;
+}

@@ -1,0 +1,78 @@
+// The E-step of the EM loop (METHOD.md step 2; kernels_cl/estep.cl): association weights
+// q_i(u) of every pixel to every volume (background i = 0, objects 1..N), plus the residual
+// |psi| of the best-associated volume per pixel (the feedback the motion detector reads).
+//
+// A volume is seen through its device view and the pose of the camera in its frame,
+// T_volume_camera. Buffers for up to `max_volumes` volumes are allocated at construction;
+// compute() allocates nothing. Not thread-safe (one SLAM thread).
+#pragma once
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "cl/context.h"
+#include "em/em_options.h"
+#include "map/volume_view.h"
+#include "map/voxel_layout.h"
+
+namespace emf::em {
+
+/// One volume as the E-step reads it.
+struct EStepVolume {
+  map::VolumeDeviceView view;
+  cl_mem count_index = nullptr;  // objects: the count-block index grid; nullptr = p_fg 1
+  Eigen::Isometry3d T_volume_camera = Eigen::Isometry3d::Identity();
+};
+
+/// The same on the host, for the CPU reference.
+struct EStepHostVolume {
+  map::VolumeHostView view;  // view.count_index set for objects
+  Eigen::Isometry3d T_volume_camera = Eigen::Isometry3d::Identity();
+};
+
+/// Likelihood p(u | i) of one camera-frame point for one volume (0 outside its grid), the CPU
+/// mirror of estep_likelihood. *abs_psi receives |psi| used (NaN outside).
+float associationLikelihood(const EStepHostVolume& volume, const Eigen::Vector3f& p_camera,
+                            const EmOptions& options, float* abs_psi);
+
+/// CPU reference of a whole E-step. `vertex` CV_32FC4 (camera frame, w = 0 invalid). Returns
+/// q per volume (CV_32F, same size); `residual` (optional) gets |psi| of the volume with the
+/// largest likelihood (NaN where none).
+std::vector<cv::Mat> eStepReference(const std::vector<EStepHostVolume>& volumes,
+                                    const cv::Mat& vertex, const EmOptions& options,
+                                    cv::Mat* residual = nullptr);
+
+class EStep {
+ public:
+  /// Throws InvalidArgument for a bad size or max_volumes < 1.
+  EStep(cl::Context& ctx, const EmOptions& options, int width, int height, int max_volumes);
+
+  /// Computes q for `volumes` (at most max_volumes; [0] is the background) from the vertex map
+  /// (float4 per pixel, camera frame, w = 0 invalid). Enqueues only; q(i) / residual() are
+  /// ready for kernels enqueued after it on the same queue.
+  void compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes);
+
+  /// q of volume i of the last compute() (float per pixel).
+  const cl::MemHandle& q(int i) const { return q_.at(static_cast<size_t>(i)); }
+  /// |psi| of the best-associated volume per pixel (float, NaN = none).
+  const cl::MemHandle& residual() const { return residual_; }
+  /// Number of volumes of the last compute().
+  int volumeCount() const { return count_; }
+  int maxVolumes() const { return static_cast<int>(q_.size()); }
+
+  /// Blocking downloads (outputs, tests): CV_32F images of the frame size.
+  cv::Mat downloadQ(int i) const;
+  cv::Mat downloadResidual() const;
+
+ private:
+  cl::Context& ctx_;
+  EmOptions options_;
+  int width_, height_;
+  std::vector<cl::MemHandle> q_;
+  cl::MemHandle sum_, best_, residual_;
+  cl::KernelHandle likelihood_, normalize_;
+  int count_ = 0;
+};
+
+}  // namespace emf::em

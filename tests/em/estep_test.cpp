@@ -1,0 +1,209 @@
+// The E-step kernel (kernels_cl/estep.cl) against its CPU reference on PoCL, and the
+// association it produces on a constructed scene: a room corner (background volume, walls only)
+// and two boxes, each in its own object volume with foreground/background counts.
+#include "em/estep.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "map/map_math.h"
+#include "test_support.h"
+#include "track_test_support.h"
+
+namespace emf::em {
+namespace {
+
+constexpr float kQTolerance = 1e-4f;         // |q kernel - q reference| (float exp, sums)
+constexpr float kResidualTolerance = 1e-5f;  // |residual kernel - reference|, metres
+constexpr float kFgCounts = 0.95f;           // p_fg written into voxels near the box
+constexpr float kBgCounts = 0.05f;           // elsewhere in the object volume
+
+// An object volume holding one box, with a count block per TSDF block.
+struct ObjectVolume {
+  test::HostVolume tsdf;
+  std::vector<int32_t> count_index;
+  Eigen::Isometry3d T_background_object = Eigen::Isometry3d::Identity();
+  ObjectVolume() : tsdf({1, 1, 1}, 0.01f, 0.1f) {}
+  map::VolumeHostView view() const {
+    map::VolumeHostView v = tsdf.view();
+    v.count_index = count_index.data();
+    return v;
+  }
+};
+
+ObjectVolume makeObject(const test::AnalyticScene::Box& box) {
+  ObjectVolume o;
+  const float voxel = 0.01f, extent = 0.8f;
+  const int blocks = static_cast<int>(std::ceil(extent / voxel / map::kBlockSize));
+  const Eigen::Vector3f corner = box.center - Eigen::Vector3f::Constant(extent / 2);
+  o.T_background_object.translation() = corner.cast<double>();
+  test::AnalyticScene only_box;
+  only_box.boxes.push_back({box.center - corner, box.half_extent});
+  o.tsdf = test::volumeFromSdf([&](const Eigen::Vector3f& x) { return only_box.sdf(x); },
+                               Eigen::Vector3i::Constant(blocks), voxel, 0.1f, 10.0f);
+  // Count blocks: one per allocated TSDF block, appended to the same voxel array.
+  o.count_index.assign(o.tsdf.index.size(), -1);
+  const int tsdf_slots = o.tsdf.allocatedBlocks();
+  int next = tsdf_slots;
+  for (size_t b = 0; b < o.tsdf.index.size(); ++b) {
+    if (o.tsdf.index[b] < 0) continue;
+    o.count_index[b] = next++;
+  }
+  o.tsdf.voxels.resize(static_cast<size_t>(next) * map::kBlockVoxels);
+  const Eigen::Vector3i dims = o.tsdf.dims_blocks;
+  for (size_t b = 0; b < o.count_index.size(); ++b) {
+    if (o.count_index[b] < 0) continue;
+    const Eigen::Vector3i bc = map::blockCoords(dims, static_cast<int>(b));
+    for (int l = 0; l < map::kBlockVoxels; ++l) {
+      const Eigen::Vector3i lv(l % map::kBlockSize, (l / map::kBlockSize) % map::kBlockSize,
+                               l / (map::kBlockSize * map::kBlockSize));
+      const Eigen::Vector3f c = map::voxelCentre(bc * map::kBlockSize + lv, voxel);
+      const bool near_box =
+          ((c - (box.center - corner)).cwiseAbs() - box.half_extent).maxCoeff() < 0.05f;
+      map::Voxel& v = o.tsdf.voxels[static_cast<size_t>(o.count_index[b]) * map::kBlockVoxels +
+                                    static_cast<size_t>(l)];
+      for (int k = 0; k < 4; ++k) v = map::addCounts(v, near_box ? kFgCounts : kBgCounts);
+    }
+  }
+  return o;
+}
+
+cv::Mat backProject(const cv::Mat& depth, const io::Intrinsics& k) {
+  cv::Mat vertex(depth.size(), CV_32FC4, cv::Scalar(0, 0, 0, 0));
+  for (int v = 0; v < depth.rows; ++v) {
+    for (int u = 0; u < depth.cols; ++u) {
+      const float z = depth.at<float>(v, u);
+      if (std::isnan(z)) continue;
+      vertex.at<cv::Vec4f>(v, u) = cv::Vec4f(static_cast<float>((u - k.cx) / k.fx) * z,
+                                             static_cast<float>((v - k.cy) / k.fy) * z, z, 1.0f);
+    }
+  }
+  return vertex;
+}
+
+class EStepTest : public test::WithClContext {};
+
+TEST_F(EStepTest, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
+  const test::AnalyticScene scene = test::roomCornerScene();
+  test::AnalyticScene walls = scene;
+  walls.boxes.clear();
+  const float bg_voxel = 0.02f;
+  const test::HostVolume background =
+      test::volumeFromSdf([&](const Eigen::Vector3f& x) { return walls.sdf(x); },
+                          Eigen::Vector3i::Constant(16), bg_voxel, 10 * bg_voxel, 10.0f);
+  const ObjectVolume obj1 = makeObject(scene.boxes[0]);
+  const ObjectVolume obj2 = makeObject(scene.boxes[1]);
+
+  io::Intrinsics k = test::smallCamera().scaled(160, 120);
+  const Eigen::Isometry3d T_bg_camera = test::roomCornerCamera();
+  const cv::Mat depth = scene.render(k, T_bg_camera);
+  const cv::Mat wall_depth = walls.render(k, T_bg_camera);
+  const cv::Mat vertex = backProject(depth, k);
+
+  EmOptions options;
+  std::vector<EStepHostVolume> host = {
+      {background.view(), T_bg_camera},
+      {obj1.view(), obj1.T_background_object.inverse() * T_bg_camera},
+      {obj2.view(), obj2.T_background_object.inverse() * T_bg_camera}};
+  cv::Mat residual_ref;
+  const std::vector<cv::Mat> q_ref = eStepReference(host, vertex, options, &residual_ref);
+
+  // Device: every volume has its own voxel buffer here (the pool is shared in the system).
+  const test::DeviceVolume d_bg = test::upload(ctx(), background);
+  const test::DeviceVolume d_1 = test::upload(ctx(), obj1.tsdf);
+  const test::DeviceVolume d_2 = test::upload(ctx(), obj2.tsdf);
+  const cl::MemHandle c_1 =
+      ctx().buffer(CL_MEM_READ_ONLY, obj1.count_index.size() * 4, obj1.count_index.data());
+  const cl::MemHandle c_2 =
+      ctx().buffer(CL_MEM_READ_ONLY, obj2.count_index.size() * 4, obj2.count_index.data());
+  const cl::MemHandle d_vertex =
+      ctx().buffer(CL_MEM_READ_ONLY, vertex.total() * sizeof(cv::Vec4f), vertex.data);
+  EStep estep(ctx(), options, k.width, k.height, 4);
+  estep.compute(d_vertex.get(), {{d_bg.view, nullptr, host[0].T_volume_camera},
+                                 {d_1.view, c_1.get(), host[1].T_volume_camera},
+                                 {d_2.view, c_2.get(), host[2].T_volume_camera}});
+  ctx().finish();
+  ASSERT_EQ(estep.volumeCount(), 3);
+
+  for (int i = 0; i < 3; ++i) {
+    const cv::Mat q = estep.downloadQ(i);
+    double max_diff = 0;
+    for (int v = 0; v < q.rows; ++v) {
+      for (int u = 0; u < q.cols; ++u) {
+        max_diff = std::max(max_diff, std::fabs(static_cast<double>(q.at<float>(v, u)) -
+                                                q_ref[static_cast<size_t>(i)].at<float>(v, u)));
+      }
+    }
+    EXPECT_LT(max_diff, kQTolerance) << "volume " << i;
+  }
+  const cv::Mat residual = estep.downloadResidual();
+  int residual_mismatch = 0;
+  for (int v = 0; v < residual.rows; ++v) {
+    for (int u = 0; u < residual.cols; ++u) {
+      const float a = residual.at<float>(v, u), b = residual_ref.at<float>(v, u);
+      if (std::isnan(a) != std::isnan(b) ||
+          (!std::isnan(a) && std::fabs(a - b) > kResidualTolerance)) {
+        ++residual_mismatch;
+      }
+    }
+  }
+  EXPECT_EQ(residual_mismatch, 0);
+
+  // Semantics: box pixels belong to their object, wall pixels to the background, q sums to 1.
+  const cv::Mat q0 = estep.downloadQ(0), q1 = estep.downloadQ(1), q2 = estep.downloadQ(2);
+  int box_px = 0, box_ok = 0, wall_px = 0, wall_ok = 0, sum_bad = 0;
+  for (int v = 0; v < depth.rows; ++v) {
+    for (int u = 0; u < depth.cols; ++u) {
+      const float z = depth.at<float>(v, u), zw = wall_depth.at<float>(v, u);
+      if (std::isnan(z)) continue;
+      const float s = q0.at<float>(v, u) + q1.at<float>(v, u) + q2.at<float>(v, u);
+      if (std::fabs(s - 1.0f) > 1e-5f) ++sum_bad;
+      const Eigen::Vector3d p = T_bg_camera * Eigen::Vector3d(vertex.at<cv::Vec4f>(v, u)[0],
+                                                              vertex.at<cv::Vec4f>(v, u)[1], z);
+      const auto inside = [&](const test::AnalyticScene::Box& b) {
+        return ((p.cast<float>() - b.center).cwiseAbs() - b.half_extent).maxCoeff() < 0.005f;
+      };
+      if (inside(scene.boxes[0])) {
+        ++box_px;
+        if (q1.at<float>(v, u) > 0.8f) ++box_ok;
+      } else if (inside(scene.boxes[1])) {
+        ++box_px;
+        if (q2.at<float>(v, u) > 0.8f) ++box_ok;
+      } else if (std::fabs(z - zw) < 1e-4f) {
+        ++wall_px;
+        if (q0.at<float>(v, u) > 0.8f) ++wall_ok;
+      }
+    }
+  }
+  EXPECT_EQ(sum_bad, 0);
+  ASSERT_GT(box_px, 200);
+  ASSERT_GT(wall_px, 2000);
+  EXPECT_GT(box_ok, 0.9 * box_px) << box_ok << " of " << box_px;
+  EXPECT_GT(wall_ok, 0.9 * wall_px) << wall_ok << " of " << wall_px;
+}
+
+TEST(EStepReference, LikelihoodFollowsTheMethodFormula) {
+  // A volume whose SDF is the plane z = 0.5 (psi = 0.5 - z in front of it): points at known
+  // distances give alpha/(2 sigma) exp(-|psi|/sigma) + (1-alpha) p_U; outside the grid 0.
+  const test::HostVolume plane =
+      test::volumeFromSdf([](const Eigen::Vector3f& x) { return 0.5f - x.z(); },
+                          Eigen::Vector3i::Constant(8), 0.02f, 0.2f, 5.0f);
+  EmOptions o;
+  EStepHostVolume vol{plane.view(), Eigen::Isometry3d::Identity()};
+  for (const float d : {0.0f, 0.01f, 0.03f, -0.05f}) {
+    float abs_psi = 0;
+    const float lik =
+        associationLikelihood(vol, Eigen::Vector3f(0.61f, 0.65f, 0.5f - d), o, &abs_psi);
+    const double expected = o.alpha / (2 * o.sigma_m) * std::exp(-std::fabs(d) / o.sigma_m) +
+                            (1 - o.alpha) * o.p_uniform;
+    EXPECT_NEAR(abs_psi, std::fabs(d), 2e-4) << d;
+    EXPECT_NEAR(lik, expected, 1e-2 * expected) << d;
+  }
+  float abs_psi = 0;
+  EXPECT_EQ(associationLikelihood(vol, Eigen::Vector3f(-0.1f, 0.5f, 0.5f), o, &abs_psi), 0.0f);
+  EXPECT_TRUE(std::isnan(abs_psi));
+}
+
+}  // namespace
+}  // namespace emf::em
