@@ -38,10 +38,13 @@ struct ObjectOptions {
   int invisible_min_px = 1600;
   int visibility_border_px = 20;
   double min_mean_association = 0.1;
+  int max_objects = 8;
+  int max_grow_blocks = 4;
 
   void bind(OptionBinder& b) {
+    // Pixel thresholds refer to 640x480 images; the SLAM scales them with the image width.
     b.integer("min_detection_px", min_detection_px, 0, 10000, "px",
-              "detections with a box side below this are dropped");
+              "detections with a box side below this are dropped (at 640x480)");
     b.textList("exclude_classes", exclude_classes, "classes that never create objects");
     b.boolean("track_person", track_person, "track people as objects that are never rendered");
     b.real("match_iou", match_iou, 0.0, 1.0, "", "min mask IoU to match a detection");
@@ -56,11 +59,15 @@ struct ObjectOptions {
     b.real("max_mask_covered", max_mask_covered, 0.0, 1.0, "",
            "no creation if this fraction of the mask is covered by objects");
     b.integer("invisible_min_px", invisible_min_px, 0, 1000000, "px",
-              "objects rendering fewer pixels (inside the border) are deleted");
+              "objects rendering fewer pixels (inside the border) are deleted (at 640x480)");
     b.integer("visibility_border_px", visibility_border_px, 0, 1000, "px",
-              "image border ignored by the visibility test");
+              "image border ignored by the visibility test (at 640x480)");
     b.real("min_mean_association", min_mean_association, 0.0, 1.0, "",
            "objects whose mean association over their mask is below this are deleted");
+    b.integer("max_objects", max_objects, 0, 64, "",
+              "object volumes alive at once (sizes the per-frame buffers)");
+    b.integer("max_grow_blocks", max_grow_blocks, 0, 64, "blocks",
+              "most blocks an object volume grows per side on one detection");
   }
 };
 

@@ -1,5 +1,7 @@
 #include "pipeline/slam_system.h"
 
+#include <cmath>
+
 #include "common/error.h"
 #include "common/log.h"
 
@@ -15,9 +17,13 @@ map::VolumeDeviceView deviceView(const map::Volume& volume) {
   return v;
 }
 
-const std::vector<std::string>& SlamSystem::stageNames() {
-  static const std::vector<std::string> kStages = {"preprocess", "track", "integrate"};
-  return kStages;
+track::TrackOptions objectTrackOptions(const track::TrackOptions& camera) {
+  track::TrackOptions o = camera;
+  // An object volume is mostly unobserved space around the object, and every pixel inside it
+  // has some association q > 0: the fraction of pixels landing on observed map says nothing
+  // about the object. Its loss is judged by inliers, conditioning, motion and convergence.
+  o.min_valid_fraction = 0.0;
+  return o;
 }
 
 const char* objectStateName(ObjectState state) {
@@ -34,6 +40,12 @@ const char* objectStateName(ObjectState state) {
   return "?";
 }
 
+const std::vector<std::string>& SlamSystem::stageNames() {
+  static const std::vector<std::string> kStages = {"preprocess",    "estep",     "track",
+                                                   "track_objects", "integrate", "objects"};
+  return kStages;
+}
+
 SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrinsics& intrinsics,
                        const std::string& /*source_uri*/)
     : ctx_(ctx),
@@ -42,16 +54,32 @@ SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrins
       pool_(std::make_unique<map::VoxelPool>(ctx, config.map)),
       preprocessor_(ctx, config.preprocess, intrinsics),
       tracker_(ctx, config.track, intrinsics.width, intrinsics.height),
+      object_tracker_(ctx, objectTrackOptions(config.track), intrinsics.width, intrinsics.height),
+      estep_(ctx, config.em, intrinsics.width, intrinsics.height, 1 + config.objects.max_objects),
+      raycaster_(ctx, config.map, intrinsics.width, intrinsics.height),
       timer_(stageNames(), 4096) {
+  // Pixel thresholds of the object rules are given for 640x480 images: scale them.
+  const double scale = intrinsics.width / 640.0;
+  em::ObjectOptions& o = config_.objects;
+  o.min_detection_px = static_cast<int>(std::lround(o.min_detection_px * scale));
+  o.visibility_border_px = static_cast<int>(std::lround(o.visibility_border_px * scale));
+  o.invisible_min_px = static_cast<int>(std::lround(o.invisible_min_px * scale * scale));
   const map::VolumeSpec spec = map::VolumeSpec::background(config.map);
   background_ = std::make_unique<map::Volume>(
       *pool_, spec, map::backgroundVolumePose(config.map, spec, Eigen::Isometry3d::Identity()));
+  const size_t image_bytes = sizeof(float) * static_cast<size_t>(intrinsics.width) *
+                             static_cast<size_t>(intrinsics.height);
+  fg_mask_ = ctx.buffer(CL_MEM_READ_ONLY, image_bytes);
+  new_weights_ = ctx.buffer(CL_MEM_READ_ONLY, image_bytes);
   logInfo("background volume: ", spec.dims_blocks.x() * map::kBlockSize, "^3 voxels of ",
           spec.voxel_size_m * 100, " cm; pool ", pool_->capacitySlots(), " blocks (",
-          config.map.memory_mb, " MiB)");
+          config.map.memory_mb, " MiB); up to ", config.objects.max_objects, " objects");
 }
 
-FrameOutcome SlamSystem::process(const io::Frame& frame) {
+SlamSystem::~SlamSystem() = default;
+
+FrameOutcome SlamSystem::process(const io::Frame& frame,
+                                 const std::vector<io::Detection>* detections) {
   if (frame.depth.type() != CV_32FC1 || frame.depth.cols != intrinsics_.width ||
       frame.depth.rows != intrinsics_.height) {
     throw InvalidArgument("frame " + std::to_string(frame.index) + ": depth must be CV_32F " +
@@ -64,19 +92,38 @@ FrameOutcome SlamSystem::process(const io::Frame& frame) {
   out.index = frames_;
   out.timestamp = frame.timestamp;
   out.first = frames_ == 0;
+  pending_fg_.clear();
+  estep_ids_.clear();
+  unmatched_.clear();
+  created_mask_.release();
+  deleted_now_.clear();
   {
     ScopedStage s(timer_, "preprocess");
     preprocessor_.process(frame.depth);  // also keeps the raw depth on the device
     ctx_.finish();                       // stage times include the device work
   }
+  const cl_mem vertex = preprocessor_.vertexMap().get();
   if (!out.first) {
-    ScopedStage s(timer_, "track");
-    // Constant-velocity prediction from the last tracked motion.
+    // Constant-velocity predictions from the last tracked motions (camera and objects).
     const Eigen::Isometry3d T_world_predicted = T_world_camera_ * last_motion_;
-    const Eigen::Isometry3d T_volume_init =
-        background_->T_world_volume().inverse() * T_world_predicted;
-    out.track = tracker_.track(deviceView(*background_), preprocessor_.vertexMap().get(), nullptr,
-                               T_volume_init);
+    std::vector<Eigen::Isometry3d> T_oc_predicted;
+    for (const auto& o : objects_) {
+      T_oc_predicted.push_back(o.volume->T_world_volume().inverse() * T_world_camera_ *
+                               o.last_motion);
+    }
+    const bool with_objects = !objects_.empty();
+    if (with_objects) {
+      ScopedStage s(timer_, "estep");
+      estep_.compute(vertex, eStepVolumes(T_world_predicted, T_oc_predicted));
+      ctx_.finish();
+    }
+    {
+      ScopedStage s(timer_, "track");
+      const Eigen::Isometry3d T_volume_init =
+          background_->T_world_volume().inverse() * T_world_predicted;
+      out.track = tracker_.track(deviceView(*background_), vertex,
+                                 with_objects ? estep_.q(0).get() : nullptr, T_volume_init);
+    }
     if (out.track.lost) {
       out.lost = true;
       out.loss_reason = out.track.loss_reason;
@@ -88,33 +135,79 @@ FrameOutcome SlamSystem::process(const io::Frame& frame) {
       last_motion_ = T_world_camera_.inverse() * T_world_new;
       T_world_camera_ = T_world_new;
     }
+    if (with_objects && !out.lost) trackObjects(T_oc_predicted);
+    if (out.lost) {
+      for (auto& o : objects_) o.state = ObjectState::kLost;
+    }
   }
   out.T_world_camera = T_world_camera_;
   if (!out.lost) {
-    ScopedStage s(timer_, "integrate");
-    map::IntegrationInput in;
-    in.depth = &preprocessor_.inputDepth();  // raw depth (metres, NaN invalid)
-    in.intrinsics = intrinsics_;
-    in.T_world_camera = T_world_camera_;
-    out.allocation = background_->fuse(in);
-    ctx_.finish();
+    if (detections) {
+      ScopedStage s(timer_, "objects");
+      matchDetections(*detections, &out);
+      createObjects();
+    }
+    {
+      ScopedStage s(timer_, "integrate");
+      integrateAll();
+      out.allocation = background_->lastReport();
+      ctx_.finish();
+    }
+    {
+      ScopedStage s(timer_, "objects");
+      if (detections) deleteByExistence();
+      if (!objects_.empty()) checkVisibility();
+    }
   }
+  fillObjectOutcomes(&out);
   timer_.endFrame();
   ++frames_;
   return out;
 }
 
-std::vector<ObjectOutcome> SlamSystem::objects() const { return {}; }
+std::vector<ObjectOutcome> SlamSystem::objects() const {
+  FrameOutcome out;
+  fillObjectOutcomes(&out);
+  std::vector<ObjectOutcome> alive;
+  for (auto& o : out.objects) {
+    if (o.state != ObjectState::kDeleted) alive.push_back(std::move(o));
+  }
+  return alive;
+}
 
 const map::Volume* SlamSystem::volume(int id) const {
-  return id == 0 ? background_.get() : nullptr;
+  if (id == 0) return background_.get();
+  for (const auto& o : objects_) {
+    if (o.id == id) return o.volume.get();
+  }
+  return nullptr;
 }
 
 std::vector<map::RenderItem> SlamSystem::renderItems() const {
+  std::vector<map::RenderItem> items;
   map::RenderItem bg;
   bg.volume = background_.get();
   bg.id = 0;
-  return {bg};
+  items.push_back(bg);
+  for (const auto& o : objects_) {
+    if (!o.rendered) continue;
+    map::RenderItem it;
+    it.volume = o.volume.get();
+    it.id = o.id;
+    it.depth_margin_m = background_->spec().voxel_size_m;
+    items.push_back(it);
+  }
+  return items;
+}
+
+SlamSystem::Associations SlamSystem::associations() const {
+  Associations a;
+  if (estep_ids_.empty()) return a;
+  a.ids = estep_ids_;
+  for (size_t i = 0; i < estep_ids_.size(); ++i)
+    a.q.push_back(estep_.downloadQ(static_cast<int>(i)));
+  a.residual = estep_.downloadResidual();
+  return a;
 }
 
 }  // namespace emf::pipeline

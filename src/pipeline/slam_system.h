@@ -9,11 +9,15 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <functional>
+#include <map>
 #include <memory>
 #include <string>
 
 #include "cl/context.h"
 #include "common/config.h"
+#include "em/estep.h"
+#include "em/object_rules.h"
 #include "io/frame.h"
 #include "map/raycaster.h"
 #include "map/volume.h"
@@ -63,8 +67,26 @@ struct FrameOutcome {
   int detections = 0;         // detections used this frame
 };
 
+/// The tracking options for object volumes derived from the camera's (track section).
+track::TrackOptions objectTrackOptions(const track::TrackOptions& camera);
+
 /// The device view of a volume that tracking and the E-step read.
 map::VolumeDeviceView deviceView(const map::Volume& volume);
+
+/// An object volume and its bookkeeping (METHOD.md "State").
+struct TrackedObject {
+  int id = 0;
+  std::string class_name;
+  bool rendered = true;  // false for people (tracked so they leave the background, not shown)
+  std::unique_ptr<map::Volume> volume;  // its pose T_world_volume is the object's pose
+  /// Camera motion relative to the object over the last tracked frame, T_prev_curr (frame
+  /// independent: unchanged when the volume grows). Predicts the next pose.
+  Eigen::Isometry3d last_motion = Eigen::Isometry3d::Identity();
+  em::Existence existence;
+  int64_t first_frame = 0, last_frame = 0;
+  ObjectState state = ObjectState::kTracked;
+  int e_step_slot = 0;  // index of this object in the current E-step (1..)
+};
 
 class SlamSystem {
  public:
@@ -76,11 +98,14 @@ class SlamSystem {
   /// `source_uri` is passed to the detector plugin (config detector.plugin) if one is set.
   SlamSystem(cl::Context& ctx, const Config& config, const io::Intrinsics& intrinsics,
              const std::string& source_uri = "");
+  ~SlamSystem();
 
-  /// Processes one frame (depth CV_32F metres, NaN = invalid, of the intrinsics' size). Throws
-  /// InvalidArgument naming the frame when its size or type is wrong.
-  FrameOutcome process(const io::Frame& frame);
-
+  /// Processes one frame (depth CV_32F metres, NaN = invalid, of the intrinsics' size): the EM
+  /// loop of METHOD.md steps 1-6. `detections` (optional): instances detected on this frame
+  /// (e.g. by the caller's own detector), applied after tracking like a detector result.
+  /// Throws InvalidArgument naming the frame when its size or type is wrong.
+  FrameOutcome process(const io::Frame& frame,
+                       const std::vector<io::Detection>* detections = nullptr);
   const Eigen::Isometry3d& T_world_camera() const { return T_world_camera_; }
   map::Volume& background() { return *background_; }
   const map::Volume& background() const { return *background_; }
@@ -94,11 +119,46 @@ class SlamSystem {
   /// What a ray cast of the current map renders (background id 0 first, then every rendered
   /// object with its id), for outputs and the C API's render call.
   std::vector<map::RenderItem> renderItems() const;
+  /// The last E-step's association maps (blocking downloads, for outputs and images).
+  struct Associations {
+    std::vector<int> ids;    // volume ids: 0 = background, then objects
+    std::vector<cv::Mat> q;  // CV_32F q per id
+    cv::Mat residual;        // CV_32F |psi| of the best volume (NaN none)
+  };
+  /// Empty when no E-step ran in the last frame (no objects and no detection).
+  Associations associations() const;
+  /// Object ids rendered for the last frame (CV_32S, -1 none, 0 background only where the
+  /// last render included it); empty when nothing was rendered.
+  const cv::Mat& lastObjectIds() const { return last_ids_; }
+  /// Called with each object volume just before it is deleted (outputs save its mesh).
+  void setDeletionHook(std::function<void(const TrackedObject&)> hook) {
+    deletion_hook_ = std::move(hook);
+  }
   const io::Intrinsics& intrinsics() const { return intrinsics_; }
   int64_t framesProcessed() const { return frames_; }
   int64_t framesLost() const { return lost_; }
 
  private:
+  /// Per-frame helpers (object_lifecycle.cpp).
+  // Volumes for the E-step: the background at T_world_camera, object k at T_oc[k].
+  std::vector<em::EStepVolume> eStepVolumes(const Eigen::Isometry3d& T_world_camera,
+                                            const std::vector<Eigen::Isometry3d>& T_oc);
+  void trackObjects(const std::vector<Eigen::Isometry3d>& T_oc_predicted);
+  void integrateAll();
+  // Detection frame, before integration: match (ray-cast masks, IoU), existence counts,
+  // foreground masks of the matched objects, growth. Keeps the unmatched detections.
+  void matchDetections(const std::vector<io::Detection>& detections, FrameOutcome* out);
+  // Before integration: objects from the unmatched detections (each integrates this frame
+  // weighted by its mask; the background then skips those pixels: created_mask_).
+  void createObjects();
+  bool createObject(const io::Detection& d, const cv::Mat& vertex);
+  // After integration: delete objects whose existence probability fell too low.
+  void deleteByExistence();
+  void checkVisibility();
+  void deleteObject(size_t i, const std::string& reason);
+  void fillObjectOutcomes(FrameOutcome* out) const;
+  cv::Mat downloadVertexMap() const;
+
   cl::Context& ctx_;
   Config config_;
   io::Intrinsics intrinsics_;
@@ -106,6 +166,21 @@ class SlamSystem {
   std::unique_ptr<map::Volume> background_;
   track::Preprocessor preprocessor_;
   track::Tracker tracker_;
+  track::Tracker object_tracker_;  // objectTrackOptions(config.track)
+  em::EStep estep_;
+  map::RayCaster raycaster_;
+  cl::MemHandle fg_mask_;      // p_fg of the matched detection per pixel (count updates)
+  cl::MemHandle new_weights_;  // mask probability of a new object (its first integration)
+  std::vector<TrackedObject> objects_;
+  std::map<int, cv::Mat> pending_fg_;
+  std::vector<int> estep_ids_;  // volume ids of the last E-step (empty: none this frame)
+  cv::Mat created_mask_;        // union of the masks of objects created this frame (or empty)
+  std::vector<io::Detection> unmatched_;    // this frame's detections that matched nothing
+  std::vector<ObjectOutcome> deleted_now_;  // objects deleted in this frame  // id -> detection
+                                            // p_fg (CV_32F, NaN = no update)
+  cv::Mat last_ids_;
+  int next_object_id_ = 1;
+  std::function<void(const TrackedObject&)> deletion_hook_;
   StageTimer timer_;
   Eigen::Isometry3d T_world_camera_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d last_motion_ = Eigen::Isometry3d::Identity();  // T_prev_curr of the last frame

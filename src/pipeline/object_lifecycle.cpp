@@ -1,0 +1,348 @@
+// The object half of SlamSystem (METHOD.md steps 2-6): E-step volumes, object tracking,
+// weighted integration of every volume, detection matching, creation, growth and deletion.
+// The rules themselves are the pure functions of em/object_rules.h.
+#include <algorithm>
+#include <cmath>
+
+#include "common/log.h"
+#include "pipeline/slam_system.h"
+
+namespace emf::pipeline {
+
+namespace {
+
+constexpr float kMaskInside = 0.5f;  // a mask pixel belongs to the instance above this p_fg
+
+cv::Mat binaryMask(const cv::Mat& probability) { return probability > kMaskInside; }
+
+/// Per-axis value at fraction f of the sorted coordinates.
+Eigen::Vector3d percentile(std::vector<Eigen::Vector3d> points, double f) {
+  Eigen::Vector3d out;
+  const size_t k = std::min(points.size() - 1, static_cast<size_t>(f * (points.size() - 1)));
+  for (int a = 0; a < 3; ++a) {
+    std::nth_element(
+        points.begin(), points.begin() + static_cast<std::ptrdiff_t>(k), points.end(),
+        [a](const Eigen::Vector3d& x, const Eigen::Vector3d& y) { return x[a] < y[a]; });
+    out[a] = points[k][a];
+  }
+  return out;
+}
+
+/// Camera-frame points of the mask's pixels (p_fg > 0.5) with a valid vertex.
+std::vector<Eigen::Vector3d> maskedPoints(const cv::Mat& vertex, const cv::Mat& mask) {
+  std::vector<Eigen::Vector3d> points;
+  for (int v = 0; v < vertex.rows; ++v) {
+    for (int u = 0; u < vertex.cols; ++u) {
+      if (mask.at<float>(v, u) <= kMaskInside) continue;
+      const cv::Vec4f p = vertex.at<cv::Vec4f>(v, u);
+      if (p[3] == 0.0f) continue;
+      points.emplace_back(p[0], p[1], p[2]);
+    }
+  }
+  return points;
+}
+
+}  // namespace
+
+cv::Mat SlamSystem::downloadVertexMap() const {
+  cv::Mat vertex(intrinsics_.height, intrinsics_.width, CV_32FC4);
+  ctx_.read(preprocessor_.vertexMap(), vertex.data, vertex.total() * sizeof(cv::Vec4f));
+  return vertex;
+}
+
+std::vector<em::EStepVolume> SlamSystem::eStepVolumes(const Eigen::Isometry3d& T_world_camera,
+                                                      const std::vector<Eigen::Isometry3d>& T_oc) {
+  std::vector<em::EStepVolume> volumes;
+  volumes.push_back({deviceView(*background_), nullptr,
+                     background_->T_world_volume().inverse() * T_world_camera});
+  estep_ids_ = {0};
+  for (size_t k = 0; k < objects_.size(); ++k) {
+    TrackedObject& o = objects_[k];
+    o.e_step_slot = static_cast<int>(volumes.size());
+    volumes.push_back({deviceView(*o.volume), o.volume->countIndex().get(), T_oc[k]});
+    estep_ids_.push_back(o.id);
+  }
+  return volumes;
+}
+
+void SlamSystem::trackObjects(const std::vector<Eigen::Isometry3d>& T_oc_predicted) {
+  const cl_mem vertex = preprocessor_.vertexMap().get();
+  {
+    ScopedStage s(timer_, "estep");  // E-step again with the tracked camera pose
+    estep_.compute(vertex, eStepVolumes(T_world_camera_, T_oc_predicted));
+    ctx_.finish();
+  }
+  ScopedStage s(timer_, "track_objects");
+  for (size_t k = 0; k < objects_.size(); ++k) {
+    TrackedObject& o = objects_[k];
+    const Eigen::Isometry3d T_oc_before =
+        o.volume->T_world_volume().inverse() * T_world_camera_ * last_motion_.inverse();
+    const track::TrackResult r = object_tracker_.track(
+        deviceView(*o.volume), vertex, estep_.q(o.e_step_slot).get(), T_oc_predicted[k]);
+    logDebug("frame ", frames_, ": object ", o.id, ": ", r.iterations, " it, valid ",
+             r.valid_pixels, "/", r.input_pixels, ", inliers ", r.inlier_ratio, ", motion ",
+             r.motion_m, " m ", r.motion_deg, " deg", r.lost ? " LOST " + r.loss_reason : "");
+    if (r.lost) {
+      // Keep the object where it was in the world (its pose relative to the camera follows
+      // the camera); not integrated this frame.
+      o.state = ObjectState::kLost;
+      o.last_motion = last_motion_;
+      logDebug("frame ", frames_, ": object ", o.id, " not tracked: ", r.loss_reason);
+      continue;
+    }
+    o.state = ObjectState::kTracked;
+    o.last_frame = frames_;
+    o.last_motion = T_oc_before.inverse() * r.T_volume_camera;
+    o.volume->setPose(T_world_camera_ * r.T_volume_camera.inverse());
+  }
+}
+
+void SlamSystem::integrateAll() {
+  const bool have_q = estep_ids_.size() > 1;  // q of this frame's E-step with the objects
+  map::IntegrationInput in;
+  in.depth = &preprocessor_.inputDepth();  // raw depth (metres, NaN invalid)
+  in.intrinsics = intrinsics_;
+  in.T_world_camera = T_world_camera_;
+  in.weights = have_q ? &estep_.q(0) : nullptr;
+  if (!created_mask_.empty()) {
+    // Objects created this frame: the background does not take their pixels.
+    cv::Mat w =
+        have_q ? estep_.downloadQ(0) : cv::Mat(intrinsics_.height, intrinsics_.width, CV_32F, 1.0f);
+    w = w.mul(1.0f - created_mask_);
+    ctx_.write(new_weights_, w.data, w.total() * sizeof(float));
+    in.weights = &new_weights_;
+  }
+  background_->fuse(in);
+  for (TrackedObject& o : objects_) {
+    if (o.state != ObjectState::kTracked || !have_q || o.first_frame == frames_) continue;
+    map::IntegrationInput oi = in;
+    oi.weights = &estep_.q(o.e_step_slot);
+    const auto fg = pending_fg_.find(o.id);
+    if (fg != pending_fg_.end()) {
+      ctx_.write(fg_mask_, fg->second.data, fg->second.total() * sizeof(float));
+      oi.fg_mask = &fg_mask_;
+    }
+    const map::AllocationReport r = o.volume->fuse(oi);
+    if (r.dropped_blocks > 0) {
+      logWarning("frame ", frames_, ": object ", o.id, ": ", r.dropped_blocks,
+                 " blocks found no slot (voxel pool full: raise map.memory_mb)");
+    }
+  }
+}
+
+void SlamSystem::matchDetections(const std::vector<io::Detection>& detections, FrameOutcome* out) {
+  const em::ObjectOptions& opt = config_.objects;
+  std::vector<const io::Detection*> usable;
+  for (const auto& d : detections) {
+    if (d.mask.size() != cv::Size(intrinsics_.width, intrinsics_.height) ||
+        d.mask.type() != CV_32F) {
+      logWarning("frame ", frames_, ": detection '", d.class_name,
+                 "' ignored: its mask is not a CV_32F image of the frame size");
+      continue;
+    }
+    if (em::detectionUse(d, opt) == em::DetectionUse::kUse) usable.push_back(&d);
+  }
+  out->detector_ran = true;
+  out->detections = static_cast<int>(usable.size());
+
+  // Ray-cast object masks at the current poses (the background occludes).
+  last_ids_ = cv::Mat(intrinsics_.height, intrinsics_.width, CV_32S, cv::Scalar(-1));
+  if (!objects_.empty()) {
+    std::vector<map::RenderItem> items;
+    items.push_back({background_.get(), 0, 0.0f});
+    for (const auto& o : objects_) {
+      items.push_back({o.volume.get(), o.id, background_->spec().voxel_size_m});
+    }
+    raycaster_.render(items, intrinsics_, T_world_camera_);
+    raycaster_.download(nullptr, nullptr, &last_ids_);
+  }
+  std::vector<std::vector<double>> iou(usable.size(), std::vector<double>(objects_.size(), 0.0));
+  std::vector<cv::Mat> object_masks;
+  for (const auto& o : objects_) object_masks.push_back(last_ids_ == o.id);
+  for (size_t i = 0; i < usable.size(); ++i) {
+    const cv::Mat det = binaryMask(usable[i]->mask);
+    for (size_t k = 0; k < objects_.size(); ++k) iou[i][k] = em::maskIoU(det, object_masks[k]);
+  }
+  const std::vector<int> match = em::matchByIoU(iou, opt.match_iou);
+  std::vector<bool> matched(objects_.size(), false);
+  cv::Mat vertex;
+  for (size_t i = 0; i < usable.size(); ++i) {
+    const io::Detection& d = *usable[i];
+    if (match[i] < 0) {
+      unmatched_.push_back(d);
+      continue;
+    }
+    TrackedObject& o = objects_[static_cast<size_t>(match[i])];
+    matched[static_cast<size_t>(match[i])] = true;
+    o.existence.ex += 1.0;
+    // Foreground counts from the detection where no other object is in front.
+    cv::Mat fg = d.mask.clone();
+    const cv::Mat other = (last_ids_ > 0) & (last_ids_ != o.id);
+    fg.setTo(NAN, other);
+    pending_fg_[o.id] = fg;
+    // Growth: the detection's robust extent (10th-90th percentile, padded as at creation)
+    // must fit in the volume.
+    if (vertex.empty()) vertex = downloadVertexMap();
+    std::vector<Eigen::Vector3d> pts = maskedPoints(vertex, d.mask);
+    if (pts.size() < 10 || opt.max_grow_blocks == 0) continue;
+    const Eigen::Isometry3d T_volume_camera =
+        o.volume->T_world_volume().inverse() * T_world_camera_;
+    for (auto& p : pts) p = T_volume_camera * p;
+    const Eigen::Vector3d lo = percentile(pts, 0.1), hi = percentile(pts, 0.9);
+    const Eigen::Vector3d pad = (hi - lo) * (opt.padding - 1.0) / 2.0;
+    const map::VolumeSpec& spec = o.volume->spec();
+    const em::GrowPlan plan =
+        em::planGrowth({lo - pad, hi + pad}, spec.dims_blocks, spec.voxel_size_m, map::kBlockSize,
+                       opt.max_grow_blocks);
+    if (plan.any()) {
+      o.volume->grow(plan.add_low, plan.add_high);
+      logInfo("frame ", frames_, ": object ", o.id, " grown to ",
+              o.volume->spec().dims_blocks.transpose() * map::kBlockSize, " voxels");
+    }
+  }
+  for (size_t k = 0; k < objects_.size(); ++k) {
+    if (!matched[k]) objects_[k].existence.non_ex += 1.0;
+  }
+}
+
+void SlamSystem::createObjects() {
+  if (unmatched_.empty()) return;
+  const cv::Mat vertex = downloadVertexMap();
+  for (const io::Detection& d : unmatched_) {
+    if (!createObject(d, vertex)) continue;
+    if (created_mask_.empty()) created_mask_ = cv::Mat::zeros(d.mask.size(), CV_32F);
+    created_mask_ = cv::max(created_mask_, d.mask);
+  }
+}
+
+void SlamSystem::deleteByExistence() {
+  const em::ObjectOptions& opt = config_.objects;
+  for (size_t k = objects_.size(); k-- > 0;) {
+    if (objects_[k].first_frame == frames_) continue;  // created this frame
+    if (objects_[k].existence.shouldDelete(opt)) {
+      char reason[96];
+      std::snprintf(reason, sizeof(reason), "existence %.3f < %.3f",
+                    objects_[k].existence.probability(), opt.existence_delete);
+      deleteObject(k, reason);
+    }
+  }
+}
+
+bool SlamSystem::createObject(const io::Detection& d, const cv::Mat& vertex) {
+  const em::ObjectOptions& opt = config_.objects;
+  if (static_cast<int>(objects_.size()) >= opt.max_objects) {
+    logInfo("frame ", frames_, ": no object created for '", d.class_name, "': ", opt.max_objects,
+            " objects alive (objects.max_objects)");
+    return false;
+  }
+  std::vector<Eigen::Vector3d> points = maskedPoints(vertex, d.mask);
+  for (auto& p : points) p = T_world_camera_ * p;
+  const em::VolumePlacement placement = em::placeObject(points, opt);
+  if (placement.extent_m <= 0.0) return false;  // fewer than 10 points with depth
+  std::vector<em::OrientedBox> existing;
+  for (const auto& o : objects_) {
+    existing.push_back({o.volume->T_world_volume(), o.volume->spec().extentM().cast<double>()});
+  }
+  std::string reason;
+  if (!em::mayCreate(d, placement, T_world_camera_.translation(), existing, last_ids_, opt,
+                     &reason)) {
+    logDebug("frame ", frames_, ": no object for '", d.class_name, "': ", reason);
+    return false;
+  }
+  const map::VolumeSpec spec = map::VolumeSpec::object(config_.map, placement.resolution,
+                                                       static_cast<float>(placement.voxel_size_m));
+  Eigen::Isometry3d T_world_volume = Eigen::Isometry3d::Identity();
+  T_world_volume.translation() =
+      placement.centre_world - Eigen::Vector3d::Constant(spec.extentM().x() / 2.0);
+  TrackedObject o;
+  o.id = next_object_id_++;
+  o.class_name = d.class_name;
+  o.rendered = d.class_name != "person";
+  o.volume = std::make_unique<map::Volume>(*pool_, spec, T_world_volume);
+  o.last_motion = last_motion_;  // at first assumed still in the world
+  o.first_frame = o.last_frame = frames_;
+  // First integration: weighted by the detection's mask, which also seeds the counts.
+  const cv::Mat mask = d.mask.isContinuous() ? d.mask : d.mask.clone();
+  ctx_.write(new_weights_, mask.data, mask.total() * sizeof(float));
+  ctx_.write(fg_mask_, mask.data, mask.total() * sizeof(float));
+  map::IntegrationInput in;
+  in.depth = &preprocessor_.inputDepth();
+  in.intrinsics = intrinsics_;
+  in.T_world_camera = T_world_camera_;
+  in.weights = &new_weights_;
+  in.fg_mask = &fg_mask_;
+  const map::AllocationReport r = o.volume->fuse(in);
+  logInfo("frame ", frames_, ": object ", o.id, " ('", o.class_name,
+          "') created: ", placement.resolution, "^3 voxels of ", placement.voxel_size_m * 100,
+          " cm at (", placement.centre_world.transpose(), "), ", r.allocated_blocks, " blocks");
+  objects_.push_back(std::move(o));
+  return true;
+}
+
+void SlamSystem::checkVisibility() {
+  const em::ObjectOptions& opt = config_.objects;
+  // Objects only: visibility is about the projected mask inside the image.
+  std::vector<map::RenderItem> items;
+  for (const auto& o : objects_) items.push_back({o.volume.get(), o.id, 0.0f});
+  raycaster_.render(items, intrinsics_, T_world_camera_);
+  raycaster_.download(nullptr, nullptr, &last_ids_);
+  for (size_t k = objects_.size(); k-- > 0;) {
+    const TrackedObject& o = objects_[k];
+    if (o.first_frame == frames_) continue;  // created this frame
+    const int visible = em::visiblePixels(last_ids_, o.id, opt);
+    if (visible < opt.invisible_min_px) {
+      deleteObject(k, "invisible: " + std::to_string(visible) + " px < " +
+                          std::to_string(opt.invisible_min_px) + " px");
+      continue;
+    }
+    if (o.state != ObjectState::kTracked || estep_ids_.size() <= 1) continue;
+    const cv::Mat q = estep_.downloadQ(o.e_step_slot);
+    const double mean_q = em::meanAssociation(q, last_ids_, o.id);
+    if (mean_q < opt.min_mean_association) {
+      char reason[96];
+      std::snprintf(reason, sizeof(reason), "mean association %.3f < %.3f", mean_q,
+                    opt.min_mean_association);
+      deleteObject(k, reason);
+    }
+  }
+}
+
+void SlamSystem::deleteObject(size_t i, const std::string& reason) {
+  TrackedObject& o = objects_[i];
+  if (deletion_hook_) deletion_hook_(o);
+  ObjectOutcome d;
+  d.id = o.id;
+  d.class_name = o.class_name;
+  d.state = ObjectState::kDeleted;
+  d.T_world_object = o.volume->T_world_volume();
+  d.T_object_camera = d.T_world_object.inverse() * T_world_camera_;
+  d.existence = o.existence.probability();
+  d.first_frame = o.first_frame;
+  d.last_frame = o.last_frame;
+  d.rendered = o.rendered;
+  d.deleted_reason = reason;
+  deleted_now_.push_back(d);
+  logInfo("frame ", frames_, ": object ", o.id, " ('", o.class_name, "') deleted: ", reason);
+  objects_.erase(objects_.begin() + static_cast<std::ptrdiff_t>(i));
+}
+
+void SlamSystem::fillObjectOutcomes(FrameOutcome* out) const {
+  for (const auto& o : objects_) {
+    ObjectOutcome r;
+    r.id = o.id;
+    r.class_name = o.class_name;
+    r.state = o.state;
+    r.T_world_object = o.volume->T_world_volume();
+    r.T_object_camera = r.T_world_object.inverse() * T_world_camera_;
+    r.existence = o.existence.probability();
+    r.first_frame = o.first_frame;
+    r.last_frame = o.last_frame;
+    r.rendered = o.rendered;
+    out->objects.push_back(r);
+  }
+  for (const auto& d : deleted_now_) out->objects.push_back(d);
+  std::sort(out->objects.begin(), out->objects.end(),
+            [](const ObjectOutcome& a, const ObjectOutcome& b) { return a.id < b.id; });
+}
+
+}  // namespace emf::pipeline
