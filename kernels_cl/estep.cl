@@ -1,8 +1,11 @@
 // E-step of the EM loop (METHOD.md step 2): per pixel u and volume i, the likelihood
 //   p(u | i) = alpha / (2 sigma) * exp(-|psi_i(T_i p(u))| / sigma) * p_fg,i + (1 - alpha) p_U
 // when T_i p(u) lies inside volume i's grid, else 0; then q_i(u) = p(u | i) / sum_j p(u | j).
-// Inside the grid but where the SDF is not observed (NaN sample), |psi| = truncation: the
-// volume neither claims nor rejects the point (the authors' volumes start at +truncation).
+// Inside the grid but where the SDF is not observed (NaN sample, or an interpolated weight below
+// min_weight), |psi| = truncation: the volume neither claims nor rejects the point (the
+// authors' volumes start at +truncation). The weight floor keeps a voxel that was integrated
+// only with a tiny association (e.g. a moving object's pixels in the background, q_0 ~ 0.05)
+// from claiming the pixel fully in the next E-step.
 // p_fg = 1 for volumes without counts (the background).
 //
 // Host sequence per E-step: estep_likelihood once per volume (first = 1 for the first volume,
@@ -17,6 +20,7 @@ __kernel void estep_likelihood(__global const float4* vertex, const int count, c
                                const int4 dims, __global const short2* voxels,
                                const float voxel_size, const float truncation,
                                const float sigma, const float alpha, const float p_uniform,
+                               const float min_weight,
                                const int first, __global float* likelihood,
                                __global float* sum, __global float* best,
                                __global float* residual) {
@@ -35,7 +39,7 @@ __kernel void estep_likelihood(__global const float4* vertex, const int count, c
       float3 gradient;
       const float psi =
           emf_sample_sdf(index, dims, voxels, voxel_size, truncation, p, &weight, &gradient);
-      abs_psi = emf_is_valid(psi) ? fabs(psi) : truncation;
+      abs_psi = (emf_is_valid(psi) && weight >= min_weight) ? fabs(psi) : truncation;
       const float pfg =
           has_counts ? emf_sample_pfg(count_index, dims, voxels, voxel_size, p) : 1.0f;
       lik = alpha / (2.0f * sigma) * exp(-abs_psi / sigma) * pfg + (1.0f - alpha) * p_uniform;

@@ -13,11 +13,14 @@ struct EmOptions {
   double sigma_m = 0.02;
   double alpha = 0.8;
   double p_uniform = 1.0;
+  double min_weight = 0.5;
 
   void bind(OptionBinder& b) {
     b.real("sigma_m", sigma_m, 1e-5, 1.0, "m", "Laplace scale of the SDF residual");
     b.real("alpha", alpha, 0.0, 1.0, "", "inlier mixture weight");
     b.real("p_uniform", p_uniform, 0.0, 1e6, "", "uniform outlier likelihood p_U");
+    b.real("min_weight", min_weight, 0.0, 128.0, "",
+           "voxels with a lower TSDF weight count as unobserved in the E-step");
   }
 };
 

@@ -35,7 +35,7 @@ float associationLikelihood(const EStepHostVolume& volume, const Eigen::Vector3f
   Eigen::Vector3f gradient;
   const bool ok = map::sampleSdfReference(volume.view, p, &psi, &weight, &gradient);
   const float truncation = volume.view.truncation_m;
-  *abs_psi = ok ? std::fabs(psi) : truncation;
+  *abs_psi = (ok && weight >= static_cast<float>(options.min_weight)) ? std::fabs(psi) : truncation;
   const float pfg = volume.view.count_index ? map::samplePfgReference(volume.view, p) : 1.0f;
   const float sigma = static_cast<float>(options.sigma_m);
   const float alpha = static_cast<float>(options.alpha);
@@ -110,8 +110,8 @@ void EStep::compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes) 
                 has_counts ? v.count_index : v.view.index, has_counts, dims, v.view.voxels,
                 v.view.voxel_size_m, v.view.truncation_m, static_cast<float>(options_.sigma_m),
                 static_cast<float>(options_.alpha), static_cast<float>(options_.p_uniform),
-                static_cast<cl_int>(i == 0 ? 1 : 0), q_[i].get(), sum_.get(), best_.get(),
-                residual_.get());
+                static_cast<float>(options_.min_weight), static_cast<cl_int>(i == 0 ? 1 : 0),
+                q_[i].get(), sum_.get(), best_.get(), residual_.get());
     cl::enqueue(ctx_.queue(), likelihood_, static_cast<size_t>(count), 0, 0, 64);
   }
   for (size_t i = 0; i < volumes.size(); ++i) {
