@@ -8,6 +8,10 @@
 // from claiming the pixel fully in the next E-step.
 // p_fg = 1 for volumes without counts (the background).
 //
+// Ablation (mode 1, em.association = pfg; the paper's "w/o assoc."): objects get q_i = p_fg,i
+// at the point (0 outside the volume), the background q_0 = 1 - max_i q_i; no SDF residual
+// term. `sum` then holds the largest object p_fg.
+//
 // Host sequence per E-step: estep_likelihood once per volume (first = 1 for the first volume,
 // which initialises the running sum, the best likelihood and the residual), then
 // estep_normalize once per volume. Pixels without a valid vertex get q = 0 for every volume
@@ -20,8 +24,7 @@ __kernel void estep_likelihood(__global const float4* vertex, const int count, c
                                const int4 dims, __global const short2* voxels,
                                const float voxel_size, const float truncation,
                                const float sigma, const float alpha, const float p_uniform,
-                               const float min_weight,
-                               const int first, __global float* likelihood,
+                               const float min_weight, const int pfg_mode, const int first, __global float* likelihood,
                                __global float* sum, __global float* best,
                                __global float* residual) {
   const int u = get_global_id(0);
@@ -43,9 +46,19 @@ __kernel void estep_likelihood(__global const float4* vertex, const int count, c
       const float pfg =
           has_counts ? emf_sample_pfg(count_index, dims, voxels, voxel_size, p) : 1.0f;
       lik = alpha / (2.0f * sigma) * exp(-abs_psi / sigma) * pfg + (1.0f - alpha) * p_uniform;
+      if (pfg_mode) lik = has_counts ? pfg : 1.0f;
     }
   }
   likelihood[u] = lik;
+  if (pfg_mode) {
+    if (first) {
+      sum[u] = 0.0f;
+      residual[u] = abs_psi;
+    } else {
+      sum[u] = fmax(sum[u], lik);
+    }
+    return;
+  }
   if (first) {
     sum[u] = lik;
     best[u] = lik;
@@ -59,10 +72,16 @@ __kernel void estep_likelihood(__global const float4* vertex, const int count, c
   }
 }
 
-/// q_i(u) = likelihood_i(u) / sum(u) in place (0 where the sum is 0).
-__kernel void estep_normalize(__global float* q, __global const float* sum, const int count) {
+/// q_i(u) = likelihood_i(u) / sum(u) in place (0 where the sum is 0). pfg_mode: objects keep
+/// their p_fg, the background (is_background) gets its own value times 1 - max object p_fg.
+__kernel void estep_normalize(__global float* q, __global const float* sum, const int count,
+                              const int pfg_mode, const int is_background) {
   const int u = get_global_id(0);
   if (u >= count) return;
   const float s = sum[u];
+  if (pfg_mode) {
+    if (is_background) q[u] = q[u] * (1.0f - s);
+    return;
+  }
   q[u] = s > 0.0f ? q[u] / s : 0.0f;
 }

@@ -14,6 +14,8 @@ struct EmOptions {
   double alpha = 0.8;
   double p_uniform = 1.0;
   double min_weight = 0.5;
+  /// em: the E-step (METHOD.md step 2); pfg: the paper's "w/o assoc." ablation (q_i = p_fg).
+  std::string association = "em";
 
   void bind(OptionBinder& b) {
     b.real("sigma_m", sigma_m, 1e-5, 1.0, "m", "Laplace scale of the SDF residual");
@@ -21,6 +23,8 @@ struct EmOptions {
     b.real("p_uniform", p_uniform, 0.0, 1e6, "", "uniform outlier likelihood p_U");
     b.real("min_weight", min_weight, 0.0, 128.0, "",
            "voxels with a lower TSDF weight count as unobserved in the E-step");
+    b.choice("association", association, {"em", "pfg"},
+             "em = association likelihoods; pfg = foreground probability only (ablation)");
   }
 };
 

@@ -37,6 +37,7 @@ float associationLikelihood(const EStepHostVolume& volume, const Eigen::Vector3f
   const float truncation = volume.view.truncation_m;
   *abs_psi = (ok && weight >= static_cast<float>(options.min_weight)) ? std::fabs(psi) : truncation;
   const float pfg = volume.view.count_index ? map::samplePfgReference(volume.view, p) : 1.0f;
+  if (options.association == "pfg") return volume.view.count_index ? pfg : 1.0f;
   const float sigma = static_cast<float>(options.sigma_m);
   const float alpha = static_cast<float>(options.alpha);
   return alpha / (2.0f * sigma) * std::exp(-*abs_psi / sigma) * pfg +
@@ -64,6 +65,17 @@ std::vector<cv::Mat> eStepReference(const std::vector<EStepHostVolume>& volumes,
           best = lik[i];
           res.at<float>(v, u) = lik[i] > 0.0f ? abs_psi : NAN;
         }
+      }
+      if (options.association == "pfg") {
+        float max_pfg = 0.0f;
+        for (size_t i = 1; i < volumes.size(); ++i) max_pfg = std::max(max_pfg, lik[i]);
+        for (size_t i = 0; i < volumes.size(); ++i) {
+          q[i].at<float>(v, u) = i == 0 ? lik[0] * (1.0f - max_pfg) : lik[i];
+        }
+        float abs_psi = NAN;
+        associationLikelihood(volumes[0], {p[0], p[1], p[2]}, options, &abs_psi);
+        res.at<float>(v, u) = abs_psi;
+        continue;
       }
       for (size_t i = 0; i < volumes.size(); ++i) {
         q[i].at<float>(v, u) = sum > 0.0f ? lik[i] / sum : 0.0f;
@@ -96,6 +108,7 @@ void EStep::compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes) 
                           " volumes, capacity " + std::to_string(q_.size()));
   }
   const int count = width_ * height_;
+  const cl_int pfg_mode = options_.association == "pfg" ? 1 : 0;
   for (size_t i = 0; i < volumes.size(); ++i) {
     const EStepVolume& v = volumes[i];
     const Eigen::Matrix<float, 3, 4> M = poseRows(v.T_volume_camera);
@@ -110,12 +123,14 @@ void EStep::compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes) 
                 has_counts ? v.count_index : v.view.index, has_counts, dims, v.view.voxels,
                 v.view.voxel_size_m, v.view.truncation_m, static_cast<float>(options_.sigma_m),
                 static_cast<float>(options_.alpha), static_cast<float>(options_.p_uniform),
-                static_cast<float>(options_.min_weight), static_cast<cl_int>(i == 0 ? 1 : 0),
-                q_[i].get(), sum_.get(), best_.get(), residual_.get());
+                static_cast<float>(options_.min_weight), pfg_mode,
+                static_cast<cl_int>(i == 0 ? 1 : 0), q_[i].get(), sum_.get(), best_.get(),
+                residual_.get());
     cl::enqueue(ctx_.queue(), likelihood_, static_cast<size_t>(count), 0, 0, 64);
   }
   for (size_t i = 0; i < volumes.size(); ++i) {
-    cl::setArgs(normalize_, q_[i].get(), sum_.get(), count);
+    cl::setArgs(normalize_, q_[i].get(), sum_.get(), count, pfg_mode,
+                static_cast<cl_int>(i == 0 ? 1 : 0));
     cl::enqueue(ctx_.queue(), normalize_, static_cast<size_t>(count), 0, 0, 64);
   }
   count_ = static_cast<int>(volumes.size());
