@@ -46,6 +46,8 @@ struct ObjectOptions {
   int visibility_border_px = 20;
   double min_mean_association = 0.1;
   int max_objects = 8;
+  bool free_space_full_weight = false;
+  bool filter_depth = false;
   int max_grow_blocks = 4;
 
   void bind(OptionBinder& b) {
@@ -71,6 +73,12 @@ struct ObjectOptions {
               "image border ignored by the visibility test (at 640x480)");
     b.real("min_mean_association", min_mean_association, 0.0, 1.0, "",
            "objects whose mean association over their mask is below this are deleted");
+    b.boolean("free_space_full_weight", free_space_full_weight,
+              "object volumes integrate free space with weight 1 whatever q (the authors' "
+              "rule; off: weighted by q, which keeps other surfaces from eroding the object)");
+    b.boolean("filter_depth", filter_depth,
+              "the E-step and object tracking use the bilateral-filtered depth (off: the raw "
+              "depth, whose object silhouettes are not blended with the background)");
     b.integer("max_objects", max_objects, 0, 64, "",
               "object volumes alive at once (sizes the per-frame buffers)");
     b.integer("max_grow_blocks", max_grow_blocks, 0, 64, "blocks",

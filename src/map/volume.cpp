@@ -34,6 +34,7 @@ VolumeSpec VolumeSpec::background(const MapOptions& options) {
   s.dims_blocks = Eigen::Vector3i(b, b, b);
   s.voxel_size_m = static_cast<float>(options.background_voxel_m);
   s.truncation_m = static_cast<float>(options.truncation_voxels * options.background_voxel_m);
+  s.free_space_full_weight = options.free_space_full_weight;
   return s;
 }
 
@@ -46,6 +47,7 @@ VolumeSpec VolumeSpec::object(const MapOptions& options, int resolution_voxels,
   s.truncation_m = static_cast<float>(options.truncation_voxels) * voxel_size_m;
   s.has_counts = true;
   s.integrate_all_blocks = true;
+  s.free_space_full_weight = options.free_space_full_weight;
   return s;
 }
 
@@ -205,7 +207,7 @@ void Volume::integrate(const IntegrationInput& frame) {
               row4(T_camera_volume, 0), row4(T_camera_volume, 1), row4(T_camera_volume, 2),
               static_cast<cl_float>(spec_.voxel_size_m), static_cast<cl_float>(spec_.truncation_m),
               static_cast<cl_float>(1.0f / spec_.truncation_m), static_cast<cl_float>(o.max_weight),
-              static_cast<cl_int>(o.free_space_full_weight));
+              static_cast<cl_int>(spec_.free_space_full_weight));
   cl::enqueue(ctx_.queue(), integrate_, global, 0, 0, kIntegrateGroup);
   if (spec_.has_counts && frame.fg_mask) {
     cl::setArgs(count_, block_list_, count_index_, dimsBlocks(), pool_.voxels(), *frame.depth,

@@ -36,6 +36,9 @@ struct VolumeSpec {
   /// Integrate every allocated block each frame (objects: free-space carving of the whole
   /// volume) instead of only the blocks in the frame's truncation band (background).
   bool integrate_all_blocks = false;
+  /// Free space (beyond +truncation) is integrated with weight 1 whatever the association q
+  /// (the authors' rule; map.free_space_full_weight for the background).
+  bool free_space_full_weight = true;
 
   /// The background of METHOD.md step 7 from map.background_voxel_m / background_resolution
   /// (rounded up to whole blocks) / truncation_voxels.

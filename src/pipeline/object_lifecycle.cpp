@@ -46,7 +46,9 @@ std::vector<Eigen::Vector3d> maskedPoints(const cv::Mat& vertex, const cv::Mat& 
 
 cv::Mat SlamSystem::downloadVertexMap() const {
   cv::Mat vertex(intrinsics_.height, intrinsics_.width, CV_32FC4);
-  ctx_.read(preprocessor_.vertexMap(), vertex.data, vertex.total() * sizeof(cv::Vec4f));
+  ctx_.read(
+      config_.objects.filter_depth ? preprocessor_.vertexMap() : raw_preprocessor_.vertexMap(),
+      vertex.data, vertex.total() * sizeof(cv::Vec4f));
   return vertex;
 }
 
@@ -66,7 +68,7 @@ std::vector<em::EStepVolume> SlamSystem::eStepVolumes(const Eigen::Isometry3d& T
 }
 
 void SlamSystem::trackObjects(const std::vector<Eigen::Isometry3d>& T_oc_predicted) {
-  const cl_mem vertex = preprocessor_.vertexMap().get();
+  const cl_mem vertex = objectVertexMap();
   {
     ScopedStage s(timer_, "estep");  // E-step again with the tracked camera pose
     estep_.compute(vertex, eStepVolumes(T_world_camera_, T_oc_predicted));
@@ -249,8 +251,9 @@ bool SlamSystem::createObject(const io::Detection& d, const cv::Mat& vertex) {
     logDebug("frame ", frames_, ": no object for '", d.class_name, "': ", reason);
     return false;
   }
-  const map::VolumeSpec spec = map::VolumeSpec::object(config_.map, placement.resolution,
-                                                       static_cast<float>(placement.voxel_size_m));
+  map::VolumeSpec spec = map::VolumeSpec::object(config_.map, placement.resolution,
+                                                 static_cast<float>(placement.voxel_size_m));
+  spec.free_space_full_weight = opt.free_space_full_weight;
   Eigen::Isometry3d T_world_volume = Eigen::Isometry3d::Identity();
   T_world_volume.translation() =
       placement.centre_world - Eigen::Vector3d::Constant(spec.extentM().x() / 2.0);

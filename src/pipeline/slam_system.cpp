@@ -26,6 +26,12 @@ track::TrackOptions objectTrackOptions(const track::TrackOptions& camera) {
   return o;
 }
 
+track::PreprocessOptions objectPreprocessOptions(const Config& config) {
+  track::PreprocessOptions o = config.preprocess;
+  if (!config.objects.filter_depth) o.bilateral_radius_px = 0;
+  return o;
+}
+
 const char* objectStateName(ObjectState state) {
   switch (state) {
     case ObjectState::kTracked:
@@ -53,6 +59,7 @@ SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrins
       intrinsics_(intrinsics),
       pool_(std::make_unique<map::VoxelPool>(ctx, config.map)),
       preprocessor_(ctx, config.preprocess, intrinsics),
+      raw_preprocessor_(ctx, objectPreprocessOptions(config), intrinsics),
       tracker_(ctx, config.track, intrinsics.width, intrinsics.height),
       object_tracker_(ctx, objectTrackOptions(config.track), intrinsics.width, intrinsics.height),
       estep_(ctx, config.em, intrinsics.width, intrinsics.height, 1 + config.objects.max_objects),
@@ -100,7 +107,10 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
   {
     ScopedStage s(timer_, "preprocess");
     preprocessor_.process(frame.depth);  // also keeps the raw depth on the device
-    ctx_.finish();                       // stage times include the device work
+    if (!config_.objects.filter_depth && (!objects_.empty() || detections != nullptr)) {
+      raw_preprocessor_.process(frame.depth);
+    }
+    ctx_.finish();  // stage times include the device work
   }
   const cl_mem vertex = preprocessor_.vertexMap().get();
   if (!out.first) {
@@ -114,7 +124,7 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
     const bool with_objects = !objects_.empty();
     if (with_objects) {
       ScopedStage s(timer_, "estep");
-      estep_.compute(vertex, eStepVolumes(T_world_predicted, T_oc_predicted));
+      estep_.compute(objectVertexMap(), eStepVolumes(T_world_predicted, T_oc_predicted));
       ctx_.finish();
     }
     {
@@ -163,6 +173,11 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
   timer_.endFrame();
   ++frames_;
   return out;
+}
+
+cl_mem SlamSystem::objectVertexMap() const {
+  return config_.objects.filter_depth ? preprocessor_.vertexMap().get()
+                                      : raw_preprocessor_.vertexMap().get();
 }
 
 std::vector<ObjectOutcome> SlamSystem::objects() const {

@@ -67,6 +67,9 @@ struct FrameOutcome {
   int detections = 0;         // detections used this frame
 };
 
+/// The preprocessing of the depth the E-step and the objects use (objects.filter_depth).
+track::PreprocessOptions objectPreprocessOptions(const Config& config);
+
 /// The tracking options for object volumes derived from the camera's (track section).
 track::TrackOptions objectTrackOptions(const track::TrackOptions& camera);
 
@@ -157,7 +160,8 @@ class SlamSystem {
   void checkVisibility();
   void deleteObject(size_t i, const std::string& reason);
   void fillObjectOutcomes(FrameOutcome* out) const;
-  cv::Mat downloadVertexMap() const;
+  cv::Mat downloadVertexMap() const;  // of objectVertexMap()
+  cl_mem objectVertexMap() const;     // what the E-step and the objects use
 
   cl::Context& ctx_;
   Config config_;
@@ -165,6 +169,7 @@ class SlamSystem {
   std::unique_ptr<map::VoxelPool> pool_;
   std::unique_ptr<map::Volume> background_;
   track::Preprocessor preprocessor_;
+  track::Preprocessor raw_preprocessor_;  // objects.filter_depth off: no bilateral filter
   track::Tracker tracker_;
   track::Tracker object_tracker_;  // objectTrackOptions(config.track)
   em::EStep estep_;

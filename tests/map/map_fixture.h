@@ -83,7 +83,7 @@ class MapTest : public WithClQueue {
     map::integrateReference(ref, list, f.depth_host, f.weights_host, f.mask_host,
                             cameraF(f.input.intrinsics), T_cv,
                             static_cast<float>(vol.pool().options().max_weight),
-                            vol.pool().options().free_space_full_weight);
+                            vol.spec().free_space_full_weight);
     EXPECT_EQ(dev.index, ref.index);
     EXPECT_EQ(dev.count_index, ref.count_index);
     std::vector<bool> count_slot(dev.voxels.size() / map::kBlockVoxels, false);

@@ -1,151 +1,152 @@
-// The dynamic SLAM (EM loop + object lifecycle) on the synthetic presets with the simulated
-// detector's detections: camera and per-object ATE against the exact ground truth.
+// The dynamic SLAM (EM loop + object lifecycle) on the synthetic `cars` preset: object tracking
+// with perfect association (the tracker and object-map accuracy alone), and the whole system fed
+// with the simulated detector's detections (camera and per-object ATE against the exact ground
+// truth). EMF_OBJECTS_FRAMES overrides the length of the whole-system run (e.g. for a longer
+// manual check); the figures of a run are printed.
 #include <cstdlib>
 #include <map>
 
-#include "common/log.h"
 #include "io/eval.h"
-#include "map/mesh.h"
 #include "io/frame_source.h"
 #include "pipeline/slam_system.h"
 #include "test_support.h"
+#include "track/preprocess.h"
+#include "track/tracker.h"
 
 namespace emf::pipeline {
 namespace {
 
-struct RunResult {
-  io::Trajectory camera_gt, camera_est;
-  std::map<int, io::Trajectory> object_gt;   // gt id -> T_object_camera (gt object frame)
-  std::map<int, io::Trajectory> object_est;  // est id -> T_object_camera
-  std::map<int, std::string> object_class;
-  int64_t lost = 0;
-};
-
-template <typename V>
-std::string fmt(const V& v) {
-  char b[96];
-  std::snprintf(b, sizeof(b), "%.3f %.3f %.3f", double(v.x()), double(v.y()), double(v.z()));
-  return b;
-}
-
-RunResult runPreset(const std::string& uri, const Config& config) {
-  cl::Context ctx(config.cl);
-  auto src = io::openSource(uri, config.source);
-  SlamSystem slam(ctx, config, src->intrinsics());
-  RunResult r;
-  io::Frame f;
-  while (src->next(f)) {
-    const FrameOutcome o = slam.process(f, f.detections ? &*f.detections : nullptr);
-    if (std::getenv("EMF_DEBUG_Q")) {
-      const auto a = slam.associations();
-      for (size_t i = 0; i < a.ids.size(); ++i) {
-        const cv::Mat bgm = f.instance_ids == 0;
-        std::printf("frame %lld vol %d: q mass on objects %.1f, on background %.1f\n",
-                    static_cast<long long>(o.index), a.ids[i],
-                    cv::sum(a.q[i])[0] - cv::mean(a.q[i], bgm)[0] * cv::countNonZero(bgm),
-                    cv::mean(a.q[i], bgm)[0] * cv::countNonZero(bgm));
-        for (int g = 1; g <= 2; ++g) {
-          const cv::Mat m = f.instance_ids == g;
-          std::printf("frame %lld vol %d gt %d: mean q %.3f over %d px\n",
-                      static_cast<long long>(o.index), a.ids[i], g, cv::mean(a.q[i], m)[0],
-                      cv::countNonZero(m));
-        }
-      }
-    }
-    if (std::getenv("EMF_DEBUG_MESH") && o.index < 3) {
-      for (const auto& ob : o.objects) {
-        const map::Mesh m = map::extractMesh(slam.volume(ob.id)->download());
-        Eigen::Vector3f lo = Eigen::Vector3f::Constant(1e9), hi = -lo;
-        for (const auto& v : m.vertices) {
-          lo = lo.cwiseMin(v);
-          hi = hi.cwiseMax(v);
-        }
-        std::printf("frame %lld object %d: %zu vertices, box (%s) - (%s)\n",
-                    static_cast<long long>(o.index), ob.id, m.vertices.size(),
-                    fmt(lo).c_str(), fmt(hi).c_str());
-      }
-      for (const auto& [id, T_wo] : f.T_world_object_gt) {
-        std::printf("frame %lld gt %d at (%s)\n", static_cast<long long>(o.index), id,
-                    fmt((*f.T_world_camera_gt).inverse() * T_wo.translation()).c_str());
-      }
-    }
-    r.camera_gt.append(f.timestamp, *f.T_world_camera_gt);
-    r.camera_est.append(f.timestamp, o.T_world_camera);
-    for (const auto& [id, T_wo] : f.T_world_object_gt) {
-      r.object_gt[id].append(f.timestamp, T_wo.inverse() * *f.T_world_camera_gt);
-    }
-    for (const auto& ob : o.objects) {
-      if (ob.state != ObjectState::kTracked || ob.last_frame != o.index) continue;
-      r.object_est[ob.id].append(f.timestamp, ob.T_object_camera);
-      r.object_class[ob.id] = ob.class_name;
-    }
-  }
-  if (std::getenv("EMF_DEBUG_Q")) {
-    for (const auto& [gid, gt] : r.object_gt) {
-      for (size_t i = 1; i < std::min<size_t>(gt.size(), 6); ++i) {
-        const Eigen::Isometry3d d = gt.poses[i - 1].inverse() * gt.poses[i];
-        std::printf("gt %d frame %zu: camera motion in object frame %.4f m %.3f deg\n", gid, i,
-                    d.translation().norm(),
-                    Eigen::AngleAxisd(d.rotation()).angle() * 180 / M_PI);
-      }
-    }
-    for (const auto& [id, est] : r.object_est) {
-      for (size_t i = 1; i < std::min<size_t>(est.size(), 6); ++i) {
-        const Eigen::Isometry3d d = est.poses[i - 1].inverse() * est.poses[i];
-        std::printf("est %d frame %zu: camera motion in object frame %.4f m %.3f deg\n", id, i,
-                    d.translation().norm(),
-                    Eigen::AngleAxisd(d.rotation()).angle() * 180 / M_PI);
-      }
-    }
-  }
-  r.lost = slam.framesLost();
-  return r;
-}
+// Perfect association, noise-free 320x240, 0.7 cm voxels: per-frame error of the camera motion
+// relative to the car (measured: 0.7 cm / 0.27 deg mean).
+constexpr double kPerfectMeanRelativeM = 0.012;
+constexpr double kPerfectMeanRelativeDeg = 0.4;
+// Whole system, 90 frames of `cars` at 320x240 with the simulated detector every 30 frames.
+constexpr double kCameraAteM = 0.01;        // measured 1.8 mm
+constexpr double kObjectAteM = 0.05;        // measured 3.1-4.5 cm (issue target 1.5 cm: not met)
+constexpr double kObjectCoverage = 0.8;     // fraction of frames an object is tracked
 
 Config smallConfig() {
   Config c;
   c.map.memory_mb = 128;
   c.map.background_voxel_m = 0.02;
   c.map.background_resolution = 256;
-  if (std::getenv("EMF_NOFREE")) c.map.free_space_full_weight = false;
-  if (std::getenv("EMF_T1")) {
-    c.track.coarse_levels = 0;
-    c.track.max_step_scale = 1;
-    c.track.early_exit_step = 0;
-    c.track.lost_if_not_converged = false;
-  }
   return c;
 }
 
-TEST(SlamObjects, CarsPreset) {
-  const char* frames = std::getenv("EMF_OBJECTS_FRAMES");
-  const std::string n = frames ? frames : "90";
-  const RunResult r =
-      runPreset("synth:cars?frames=" + n + "&width=" + std::string(std::getenv("EMF_W") ? std::getenv("EMF_W") : "320") + "&height=" + std::string(std::getenv("EMF_H") ? std::getenv("EMF_H") : "240") + "&seed=1" + (std::getenv("EMF_NOISE") ? std::string("&noise=") + std::getenv("EMF_NOISE") : std::string()), smallConfig());
-  const double cam = io::computeAte(r.camera_gt, r.camera_est).trans_m.rmse;
-  std::printf("camera ATE %.4f m, lost %lld\n", cam, static_cast<long long>(r.lost));
-  for (const auto& [id, est] : r.object_est) {
-    for (const auto& [gid, gt] : r.object_gt) {
-      if (est.size() < 3) continue;
-      const io::AteResult a = io::computeAte(gt, est);
-      if (a.trans_m.rmse < 0.1) {
-        // Per-frame relative motion error (est pose i-1 -> i vs gt), by timestamp.
-        std::map<double, Eigen::Isometry3d> g;
-        for (size_t i = 0; i < gt.size(); ++i) g[gt.stamps[i]] = gt.poses[i];
-        double sum_t = 0, sum_r = 0;
-        for (size_t i = 1; i < est.size(); ++i) {
-          const Eigen::Isometry3d de = est.poses[i - 1].inverse() * est.poses[i];
-          const Eigen::Isometry3d dg = g.at(est.stamps[i - 1]).inverse() * g.at(est.stamps[i]);
-          const Eigen::Isometry3d e = dg.inverse() * de;
-          sum_t += e.translation().norm();
-          sum_r += Eigen::AngleAxisd(e.rotation()).angle() * 180 / M_PI;
-        }
-        std::printf("  est %d: mean relative error %.4f m %.3f deg per frame\n", id,
-                    sum_t / (est.size() - 1), sum_r / (est.size() - 1));
-      }
-      std::printf("est %d (%s, %zu poses) vs gt %d: ATE %.4f m\n", id, r.object_class.at(id).c_str(),
-                  est.size(), gid, a.trans_m.rmse);
+double angleDeg(const Eigen::Isometry3d& T) {
+  return Eigen::AngleAxisd(T.rotation()).angle() * 180.0 / M_PI;
+}
+
+TEST(SlamObjects, PerfectAssociationTracksTheCar) {
+  const Config config = smallConfig();
+  cl::Context ctx(config.cl);
+  auto src = io::openSource("synth:cars?frames=12&width=320&height=240&seed=1&noise=0",
+                            config.source);
+  const io::Intrinsics k = src->intrinsics();
+  map::VoxelPool pool(ctx, config.map);
+  track::Preprocessor pre(ctx, objectPreprocessOptions(config), k);
+  track::Tracker tracker(ctx, objectTrackOptions(config.track), k.width, k.height);
+  const size_t bytes = sizeof(float) * static_cast<size_t>(k.width * k.height);
+  cl::MemHandle q = ctx.buffer(CL_MEM_READ_WRITE, bytes);
+  std::unique_ptr<map::Volume> vol;
+  const int gid = 1;
+  Eigen::Isometry3d T_vc_prev, motion = Eigen::Isometry3d::Identity(), T_oc_gt_prev;
+  double sum_m = 0, sum_deg = 0;
+  int n = 0;
+  io::Frame f;
+  while (src->next(f)) {
+    cv::Mat mask;
+    cv::Mat(f.instance_ids == gid).convertTo(mask, CV_32F, 1.0 / 255);
+    ctx.write(q, mask.data, bytes);
+    pre.process(f.depth);
+    const Eigen::Isometry3d T_oc_gt =
+        f.T_world_object_gt.at(gid).inverse() * *f.T_world_camera_gt;
+    Eigen::Isometry3d T_vc;
+    if (!vol) {
+      // 64^3 voxels of 0.7 cm centred on the object's origin, axes along the world's.
+      map::VolumeSpec spec = map::VolumeSpec::object(config.map, 64, 0.007f);
+      spec.free_space_full_weight = config.objects.free_space_full_weight;
+      Eigen::Isometry3d T_wv = Eigen::Isometry3d::Identity();
+      T_wv.translation() =
+          f.T_world_object_gt.at(gid).translation() - Eigen::Vector3d::Constant(0.224);
+      vol = std::make_unique<map::Volume>(pool, spec, T_wv);
+      T_vc = T_wv.inverse() * *f.T_world_camera_gt;
+    } else {
+      const track::TrackResult r =
+          tracker.track(deviceView(*vol), pre.vertexMap().get(), q.get(), T_vc_prev * motion);
+      ASSERT_FALSE(r.lost) << "frame " << f.index << ": " << r.loss_reason;
+      T_vc = r.T_volume_camera;
+      motion = T_vc_prev.inverse() * T_vc;
+      // Camera motion relative to the car: estimate vs ground truth (frame independent).
+      const Eigen::Isometry3d e = (T_oc_gt_prev.inverse() * T_oc_gt).inverse() * motion;
+      sum_m += e.translation().norm();
+      sum_deg += angleDeg(e);
+      ++n;
+      vol->setPose(*f.T_world_camera_gt * T_vc.inverse());
     }
+    map::IntegrationInput in;
+    in.depth = &pre.inputDepth();
+    in.weights = &q;
+    in.intrinsics = k;
+    in.T_world_camera = *f.T_world_camera_gt;
+    vol->fuse(in);
+    T_vc_prev = T_vc;
+    T_oc_gt_prev = T_oc_gt;
+  }
+  ASSERT_EQ(n, 11);
+  std::printf("perfect association: mean relative error %.4f m %.3f deg per frame\n",
+              sum_m / n, sum_deg / n);
+  EXPECT_LT(sum_m / n, kPerfectMeanRelativeM);
+  EXPECT_LT(sum_deg / n, kPerfectMeanRelativeDeg);
+}
+
+TEST(SlamObjects, CarsPresetWithSimulatedDetections) {
+  const char* frames_env = std::getenv("EMF_OBJECTS_FRAMES");
+  const int frames = frames_env ? std::atoi(frames_env) : 90;
+  const Config config = smallConfig();
+  cl::Context ctx(config.cl);
+  auto src = io::openSource(
+      "synth:cars?frames=" + std::to_string(frames) + "&width=320&height=240&seed=1",
+      config.source);
+  SlamSystem slam(ctx, config, src->intrinsics());
+  io::Trajectory camera_gt, camera_est;
+  std::map<int, io::Trajectory> object_gt, object_est;  // T_object_camera per frame
+  io::Frame f;
+  while (src->next(f)) {
+    const FrameOutcome o = slam.process(f, f.detections ? &*f.detections : nullptr);
+    camera_gt.append(f.timestamp, *f.T_world_camera_gt);
+    camera_est.append(f.timestamp, o.T_world_camera);
+    for (const auto& [id, T_wo] : f.T_world_object_gt) {
+      object_gt[id].append(f.timestamp, T_wo.inverse() * *f.T_world_camera_gt);
+    }
+    for (const auto& ob : o.objects) {
+      if (ob.state == ObjectState::kTracked && ob.last_frame == o.index) {
+        object_est[ob.id].append(f.timestamp, ob.T_object_camera);
+      }
+    }
+  }
+  const double camera_ate = io::computeAte(camera_gt, camera_est).trans_m.rmse;
+  std::printf("camera ATE %.4f m, %lld lost\n", camera_ate,
+              static_cast<long long>(slam.framesLost()));
+  EXPECT_LT(camera_ate, kCameraAteM);
+  // Each ground-truth car is matched to the estimate with the lowest ATE among those covering
+  // enough of its frames (the `emf eval` rule).
+  for (const auto& [gid, gt] : object_gt) {
+    double best = 1e9, coverage = 0;
+    int best_id = 0;
+    for (const auto& [id, est] : object_est) {
+      const double c = static_cast<double>(est.size()) / static_cast<double>(gt.size());
+      if (c < 0.3) continue;
+      const double ate = io::computeAte(gt, est).trans_m.rmse;
+      if (ate < best) {
+        best = ate;
+        best_id = id;
+        coverage = c;
+      }
+    }
+    std::printf("car %d: object %d, ATE %.4f m, coverage %.2f\n", gid, best_id, best, coverage);
+    EXPECT_LT(best, kObjectAteM) << "car " << gid;
+    EXPECT_GE(coverage, kObjectCoverage) << "car " << gid;
   }
 }
 
