@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <opencv2/imgproc.hpp>
 
 #include "common/error.h"
@@ -47,12 +48,15 @@ cv::Mat objectOverlay(const cv::Mat& color, const cv::Mat& object_ids) {
   } else {
     base = color.clone();
   }
+  std::map<int32_t, cv::Vec3b> colors;  // objectColor() converts through a cv::Mat: once per id
   for (int y = 0; y < base.rows; ++y) {
     const int32_t* ids = object_ids.ptr<int32_t>(y);
     cv::Vec3b* px = base.ptr<cv::Vec3b>(y);
     for (int x = 0; x < base.cols; ++x) {
       if (ids[x] <= 0) continue;
-      const cv::Vec3b c = objectColor(ids[x]);
+      auto it = colors.find(ids[x]);
+      if (it == colors.end()) it = colors.emplace(ids[x], objectColor(ids[x])).first;
+      const cv::Vec3b c = it->second;
       for (int ch = 0; ch < 3; ++ch) {
         px[x][ch] =
             cv::saturate_cast<uint8_t>((1.0 - kOverlayAlpha) * px[x][ch] + kOverlayAlpha * c[ch]);
