@@ -202,6 +202,10 @@ void ObjectOutputs::writeFrameImages(const FrameOutcome& outcome, const cv::Mat&
 
 void ObjectOutputs::finish(const std::function<const map::Volume*(int id)>& volume_of) {
   for (auto& [id, t] : tracks_) {
+    if (t.summary.deleted && t.summary.mesh_file.empty()) {
+      logWarning("object ", id, " was deleted in frame ", t.summary.deleted_frame,
+                 " without onObjectDeleted(): no ", meshName(id), " (its volume is gone)");
+    }
     if (t.summary.deleted || !volume_of) continue;
     if (const map::Volume* v = volume_of(id)) writeMesh(id, v->download());
   }
