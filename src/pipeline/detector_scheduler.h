@@ -96,8 +96,9 @@ class DetectorScheduler {
   /// (may be null = none). Feedback images (CV_32F, depth size; may be null) are passed to the
   /// plugin. Sequential: on frames with frame.index % every_n_frames == 0 runs the detector now
   /// and returns its batch (also when it found nothing or failed: then `detections` is empty).
-  /// Async: hands the frame to the detector thread if it is idle (else counts a dropped frame)
-  /// and returns the newest finished result not yet returned, if any. Disabled: nullopt.
+  /// Async: returns the finished result not yet returned, if any, then hands a due frame (same
+  /// rule) to the detector thread if it is idle, else counts it as dropped. The slot holds one
+  /// frame, so every result is returned before the next hand-over. Disabled: nullopt.
   /// Detections a source attaches to frames (io::Frame::detections) are never used here: the
   /// maskfile plugin replays them.
   std::optional<DetectionBatch> submit(const io::Frame& frame,
