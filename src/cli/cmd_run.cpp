@@ -1,5 +1,7 @@
 // `emf run`: the SLAM on a source (dataset, synthetic world or sensor), writing camera.txt,
-// the background mesh and a run summary into the output folder.
+// the background mesh, per-object trajectories and meshes, optional per-frame images and a run
+// summary into the output folder. An error in the middle of the run still writes the outputs of
+// the frames done so far (run.json then has "error").
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -8,9 +10,14 @@
 #include "cli/arg_parser.h"
 #include "cli/commands.h"
 #include "cli/load_config.h"
+#include "common/error.h"
 #include "common/log.h"
 #include "io/frame_source.h"
 #include "io/trajectory.h"
+#include "map/raycaster.h"
+#include "pipeline/detector_plugin.h"
+#include "pipeline/object_outputs.h"
+#include "pipeline/plugin_search_path.h"
 #include "pipeline/progress.h"
 #include "pipeline/run_outputs.h"
 #include "pipeline/slam_system.h"
@@ -18,31 +25,54 @@
 namespace emf::cli {
 
 int cmdRun(const std::vector<std::string>& args) {
-  std::string source, config_file, out_dir = "out/run", frames_text;
+  std::string source, config_file, out_dir = "out/run", frames_text, detector, detector_config;
   std::vector<std::string> sets;
   bool quiet = false;
   ArgParser p("run",
               "Runs the SLAM on a source and writes camera.txt (TUM format, the source's "
-              "timestamps), background.ply and run.json (frames, lost frames, ms per frame per "
-              "stage, memory, device) into the output folder. Without --source, source.uri of "
-              "the configuration is used (default: the synthetic static room).");
+              "timestamps), background.ply, object-<id>.txt (T_object_camera) and object-<id>.ply "
+              "(object frame) per object, images/ when output.write_images is set, and run.json "
+              "(frames, lost frames, ms per frame per stage, memory, device, objects, detector) "
+              "into the output folder. Without --source, source.uri of the configuration is used "
+              "(default: the synthetic static room).");
   p.option("source", &source, "URI",
            "tum:<dir>, cofusion:<dir>, klg:<file>, synth:<preset>, openni2:[uri], v4l2:<dev>");
   p.option("config", &config_file, "FILE", "YAML configuration (conf/*.yaml)");
   p.repeated("set", &sets, "SECTION.KEY=VALUE", "override one configuration key");
   p.option("out", &out_dir, "DIR", "output folder (default out/run)");
   p.option("frames", &frames_text, "N", "stop after N frames (source.max_frames)");
+  p.option("detector", &detector, "NAME|PATH",
+           "detector plugin (detector.plugin): a name looked up on detector.search_path, "
+           "$EMF_PLUGIN_PATH and the plugin folders, or a path to a .so");
+  p.option("detector-config", &detector_config, "STR",
+           "configuration string for the plugin (detector.plugin_config)");
   p.flag("quiet", &quiet, "no progress line");
   if (auto code = p.parse(args)) return *code;
   if (!frames_text.empty()) sets.push_back("source.max_frames=" + frames_text);
-  const Config config = loadConfig(config_file, sets);
+  Config config = loadConfig(config_file, sets);
+  // Set directly, not through --set: plugin configuration strings may hold '=', ':' or quotes.
+  if (!detector.empty()) config.detector.plugin = detector;
+  if (!detector_config.empty()) config.detector.plugin_config = detector_config;
+  config.validate();
   if (source.empty()) source = config.source.uri;
+  if (!config.detector.plugin.empty()) {
+    // Fail before opening the device and the source: a wrong name lists the folders searched.
+    pipeline::resolvePluginPath(config.detector.plugin,
+                                pipeline::pluginSearchPath(config.detector));
+  }
 
   cl::Context ctx(config.cl);
   std::unique_ptr<io::FrameSource> src = io::openSource(source, config.source);
   const io::Intrinsics k = src->intrinsics();
   logInfo("source: ", src->describe(), "; device: ", ctx.device().device_name);
-  pipeline::SlamSystem slam(ctx, config, k);
+  pipeline::SlamSystem slam(ctx, config, k, source);
+  pipeline::ObjectOutputs objects(out_dir, config.output.binary_ply);
+  // Images: the object ids are ray cast here at each frame's estimated pose (the E-step's
+  // association maps join once SlamSystem exposes them).
+  std::unique_ptr<map::RayCaster> id_renderer;
+  if (config.output.write_images) {
+    id_renderer = std::make_unique<map::RayCaster>(ctx, config.map, k.width, k.height);
+  }
 
   int64_t total = src->size();
   if (config.source.max_frames > 0 && (total < 0 || total > config.source.max_frames)) {
@@ -57,24 +87,50 @@ int cmdRun(const std::vector<std::string>& args) {
   const auto t0 = std::chrono::steady_clock::now();
   io::Frame frame;
   int64_t n = 0;
-  while ((config.source.max_frames == 0 || n < config.source.max_frames) && src->next(frame)) {
-    const pipeline::FrameOutcome o = slam.process(frame);
-    if (o.lost) {
-      info.lost.push_back({o.index, frame.timestamp, o.loss_reason});
-      logWarning("frame ", o.index, " (t=", frame.timestamp_text,
-                 "): tracking lost: ", o.loss_reason,
-                 "; not integrated, keeping the last good pose");
-    } else if (camera.empty() || frame.timestamp > camera.stamps.back()) {
-      camera.append(frame.timestamp, o.T_world_camera);
+  try {
+    while ((config.source.max_frames == 0 || n < config.source.max_frames) && src->next(frame)) {
+      const pipeline::FrameOutcome o = slam.process(frame);
+      objects.add(o);
+      if (o.lost) {
+        info.lost.push_back({o.index, frame.timestamp, o.loss_reason});
+        logWarning("frame ", o.index, " (t=", frame.timestamp_text,
+                   "): tracking lost: ", o.loss_reason,
+                   "; not integrated, keeping the last good pose");
+      } else if (camera.empty() || frame.timestamp > camera.stamps.back()) {
+        camera.append(frame.timestamp, o.T_world_camera);
+      }
+      if (id_renderer) {
+        cv::Mat ids;
+        id_renderer->render(slam.renderItems(), k, o.T_world_camera);
+        id_renderer->download(nullptr, nullptr, &ids);
+        objects.writeFrameImages(o, frame.color, ids, {});
+      }
+      ++n;
+      if (!quiet) {
+        progress.update(n, info.lost.empty() ? "" : "lost " + std::to_string(info.lost.size()));
+      }
     }
-    ++n;
-    if (!quiet) {
-      progress.update(n, info.lost.empty() ? "" : "lost " + std::to_string(info.lost.size()));
-    }
+  } catch (const std::exception& e) {
+    // Keep what the frames so far produced: write the outputs, then fail.
+    info.error = "stopped after " + std::to_string(n) + " frames: " + e.what();
   }
   progress.finish();
   info.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::string output_error;
+  try {
+    objects.finish([&slam](int id) { return slam.volume(id); });
+  } catch (const std::exception& e) {
+    output_error = std::string("object outputs: ") + e.what();
+    if (!info.error.empty()) info.error += "; " + output_error;
+  }
+  info.objects = objects.summaries();
   pipeline::writeRunOutputs(out_dir, slam, ctx, camera, info, config.output.binary_ply);
+  if (!info.error.empty()) {
+    std::fprintf(stderr, "emf run: error: %s\n(outputs of the frames done so far are in %s)\n",
+                 info.error.c_str(), std::filesystem::absolute(out_dir).string().c_str());
+    return kExitFailure;
+  }
+  if (!output_error.empty()) throw IoError(output_error);
 
   const auto s = slam.timer().summary();
   std::printf("emf run: %lld frames (%lld lost) in %.1f s, %.1f ms/frame median (p90 %.1f)\n",
@@ -85,8 +141,9 @@ int cmdRun(const std::vector<std::string>& args) {
     std::printf("  %-10s %7.2f ms median  %7.2f ms p90\n", stage.c_str(), s.at(stage).median_ms,
                 s.at(stage).p90_ms);
   }
-  std::printf("outputs in %s: camera.txt background.ply run.json\n",
-              std::filesystem::absolute(out_dir).string().c_str());
+  std::printf("outputs in %s: camera.txt background.ply run.json, %zu object(s)%s\n",
+              std::filesystem::absolute(out_dir).string().c_str(), info.objects->size(),
+              config.output.write_images ? ", images/" : "");
   return kExitOk;
 }
 

@@ -168,7 +168,7 @@ DetectorOutput DetectorPlugin::detect(const io::Frame& frame, const cv::Mat* bac
   if (s != EMF_OK) {
     out.error =
         who + ": detect failed: " + (error[0] ? error : "no message") + " [" + statusName(s) + "]";
-    logWarning(out.error, "; continuing without detections");
+    if (log_problems_) logWarning(out.error, "; continuing without detections");
     return out;
   }
   if (!result) return out;  // nothing detected
@@ -177,7 +177,7 @@ DetectorOutput DetectorPlugin::detect(const io::Frame& frame, const cv::Mat* bac
     out.error = who + ": malformed emf_detection_result (struct_size " +
                 std::to_string(result->struct_size) + ", count " + std::to_string(result->count) +
                 "); continuing without detections";
-    logWarning(out.error);
+    if (log_problems_) logWarning(out.error);
     return out;
   }
   for (int32_t i = 0; i < result->count; ++i) {
@@ -185,7 +185,7 @@ DetectorOutput DetectorPlugin::detect(const io::Frame& frame, const cv::Mat* bac
     const std::string tag = who + " detection " + std::to_string(i);
     auto reject = [&](const std::string& why) {
       out.rejected.push_back(tag + ": " + why + " — dropped");
-      logWarning(out.rejected.back());
+      if (log_problems_) logWarning(out.rejected.back());
     };
     if (d.struct_size < kMinDetectionSize) {
       reject("struct_size " + std::to_string(d.struct_size) + " < " +

@@ -52,6 +52,9 @@ class DetectorPlugin {
 
   const std::string& name() const { return name_; }
   const std::string& path() const { return path_; }
+  /// Whether detect() logs each failure and dropped detection as a warning (default true). The
+  /// DetectorScheduler turns it off and logs once per kind of problem instead.
+  void setLogProblems(bool log_problems) { log_problems_ = log_problems; }
 
  private:
   DetectorPlugin() = default;
@@ -60,6 +63,7 @@ class DetectorPlugin {
   emf_detector* instance_ = nullptr;
   std::string name_, path_;
   io::Intrinsics intrinsics_;
+  bool log_problems_ = true;
 };
 
 }  // namespace emf::pipeline

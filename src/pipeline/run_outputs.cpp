@@ -1,13 +1,68 @@
 #include "pipeline/run_outputs.h"
 
 #include <filesystem>
-#include <nlohmann/json.hpp>
 
 #include "common/error.h"
 #include "io/atomic_output.h"
 #include "map/mesh.h"
 
 namespace emf::pipeline {
+
+namespace {
+
+nlohmann::json poseJson(const Eigen::Isometry3d& T) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (int r = 0; r < 4; ++r) {
+    rows.push_back({T.matrix()(r, 0), T.matrix()(r, 1), T.matrix()(r, 2), T.matrix()(r, 3)});
+  }
+  return rows;
+}
+
+}  // namespace
+
+nlohmann::json objectSummariesJson(const std::vector<ObjectSummary>& objects) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const ObjectSummary& o : objects) {
+    nlohmann::json j;
+    j["id"] = o.id;
+    j["class"] = o.class_name;
+    j["first_frame"] = o.first_frame;
+    j["last_frame"] = o.last_frame;
+    j["first_timestamp"] = o.first_timestamp;
+    j["last_timestamp"] = o.last_timestamp;
+    j["frames_tracked"] = o.frames_tracked;
+    j["frames_lost"] = o.frames_lost;
+    j["frames_invisible"] = o.frames_invisible;
+    j["state"] = o.deleted ? "deleted" : "alive";
+    if (o.deleted) {
+      j["deleted_frame"] = o.deleted_frame;
+      j["deleted_timestamp"] = o.deleted_timestamp;
+      j["deleted_reason"] = o.deleted_reason;
+    }
+    j["existence"] = o.existence;
+    j["T_world_object"] = poseJson(o.T_world_object);
+    j["trajectory_file"] = o.trajectory_file;
+    j["mesh_file"] = o.mesh_file;
+    out.push_back(j);
+  }
+  return out;
+}
+
+nlohmann::json detectorStatsJson(const DetectorStats& s) {
+  nlohmann::json problems = nlohmann::json::object();
+  for (const auto& [kind, count] : s.problems) problems[kind] = count;
+  return {{"plugin", s.plugin},
+          {"mode", s.mode},
+          {"runs", s.runs},
+          {"failures", s.failures},
+          {"detections", s.detections},
+          {"rejected_detections", s.rejected},
+          {"dropped_frames", s.dropped_frames},
+          {"results_delivered", s.results_delivered},
+          {"detector_ms_median", s.detector_ms_median},
+          {"detector_ms_max", s.detector_ms_max},
+          {"problems", problems}};
+}
 
 std::string runSummaryJson(const SlamSystem& slam, const cl::Context& ctx, const RunInfo& info) {
   nlohmann::json j;
@@ -45,6 +100,9 @@ std::string runSummaryJson(const SlamSystem& slam, const cl::Context& ctx, const
   const io::Intrinsics& k = slam.intrinsics();
   j["intrinsics"] = {{"fx", k.fx}, {"fy", k.fy},       {"cx", k.cx},
                      {"cy", k.cy}, {"width", k.width}, {"height", k.height}};
+  if (info.objects) j["objects"] = objectSummariesJson(*info.objects);
+  if (info.detector) j["detector"] = detectorStatsJson(*info.detector);
+  if (!info.error.empty()) j["error"] = info.error;
   return j.dump(2) + "\n";
 }
 
@@ -55,9 +113,20 @@ void writeRunOutputs(const std::string& dir, SlamSystem& slam, const cl::Context
   if (ec) throw IoError(dir + ": cannot create the output folder: " + ec.message());
   io::writeTrajectory(dir + "/camera.txt", camera,
                       "camera trajectory T_world_camera (emf run, source " + info.source_uri + ")");
-  const map::Mesh mesh = map::extractMesh(slam.background().download());
-  map::writePly(dir + "/background.ply", mesh, binary_ply);
-  io::writeFileAtomically(dir + "/run.json", runSummaryJson(slam, ctx, info));
+  // run.json is written even when the mesh cannot be (e.g. after a device error ended the run).
+  std::string mesh_error;
+  try {
+    const map::Mesh mesh = map::extractMesh(slam.background().download());
+    map::writePly(dir + "/background.ply", mesh, binary_ply);
+  } catch (const std::exception& e) {
+    mesh_error = std::string("background.ply not written: ") + e.what();
+  }
+  RunInfo written = info;
+  if (!mesh_error.empty()) {
+    written.error = written.error.empty() ? mesh_error : written.error + "; " + mesh_error;
+  }
+  io::writeFileAtomically(dir + "/run.json", runSummaryJson(slam, ctx, written));
+  if (!mesh_error.empty() && info.error.empty()) throw IoError(dir + ": " + mesh_error);
 }
 
 }  // namespace emf::pipeline

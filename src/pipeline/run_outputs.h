@@ -2,10 +2,14 @@
 // source timestamps), background.ply, run.json (summary). All files are written atomically.
 #pragma once
 
+#include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "io/trajectory.h"
+#include "pipeline/detector_scheduler.h"
+#include "pipeline/object_outputs.h"
 #include "pipeline/slam_system.h"
 
 namespace emf::pipeline {
@@ -24,9 +28,24 @@ struct RunInfo {
   std::string config_file;
   double wall_s = 0;
   std::vector<LostFrame> lost;
+  /// Per-object summaries (run.json "objects" array) when the run tracks objects.
+  std::optional<std::vector<ObjectSummary>> objects;
+  /// Detector counters (run.json "detector") when a detector ran.
+  std::optional<DetectorStats> detector;
+  /// Why the run stopped early ("" = it reached the end of the source); run.json "error".
+  std::string error;
 };
 
-/// The run summary as JSON text (frames, lost frames, per-stage ms median/p90, memory, device).
+/// run.json's "objects" array: one entry per object (id, class, first/last frame and timestamp,
+/// frames tracked/lost/invisible, state alive|deleted, deleted_frame/_timestamp/_reason when
+/// deleted, existence, T_world_object as 4 rows, trajectory_file, mesh_file).
+nlohmann::json objectSummariesJson(const std::vector<ObjectSummary>& objects);
+/// run.json's "detector" object: the DetectorStats counters.
+nlohmann::json detectorStatsJson(const DetectorStats& stats);
+
+/// The run summary as JSON text (frames, lost frames, per-stage ms median/p90, memory, device,
+/// and when given: "objects" [{id, class, first_frame, last_frame, frames_tracked, ...,
+/// state alive|deleted, deleted_frame, deleted_reason}], "detector" counters, "error").
 std::string runSummaryJson(const SlamSystem& slam, const cl::Context& ctx, const RunInfo& info);
 
 /// Writes camera.txt, background.ply (binary or ASCII) and run.json into `dir` (created).

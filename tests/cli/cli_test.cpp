@@ -1,4 +1,12 @@
-// The `emf` command line: exit codes, --help for every subcommand, `emf info`.
+// The `emf` command line: exit codes, --help for every subcommand, `emf info`, `emf run`'s
+// detector flags and its outputs (also when a run stops at a broken frame).
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "io/trajectory.h"
 #include "test_support.h"
 
 namespace emf {
@@ -66,6 +74,102 @@ TEST(Cli, ConfigErrorsExitOneWithMessage) {
   EXPECT_NE(out.find("em.alpha: value 3 is out of range [0, 1]"), std::string::npos) << out;
   EXPECT_EQ(test::runCommand(cli() + " config --list", &out), 0);
   EXPECT_NE(out.find("map.memory_mb"), std::string::npos) << out;
+}
+
+// ---- emf run ---------------------------------------------------------------------------------
+
+// A tiny, fast run: 80x60 synthetic room, small pool, quiet.
+const char* kTinyRun =
+    " run --quiet --source 'synth:room?frames=3&width=80&height=60' --set map.memory_mb=32"
+    " --set map.background_voxel_m=0.04 --set map.background_resolution=128";
+
+std::string readText(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+TEST(CliRun, UnknownDetectorListsTheFoldersSearched) {
+  const std::string out_dir = test::tempDir("run-nodet") + "/out";
+  std::string out;
+  const int code = test::runCommand("EMF_PLUGIN_PATH=/tmp/emf-plugins-a:/tmp/emf-plugins-b " +
+                                        cli() + kTinyRun + " --detector nosuch --out " + out_dir,
+                                    &out);
+  EXPECT_EQ(code, 1) << out;
+  EXPECT_NE(out.find("emf run: error: detector plugin 'nosuch' not found"), std::string::npos)
+      << out;
+  EXPECT_NE(out.find("/tmp/emf-plugins-a"), std::string::npos) << out;
+  EXPECT_NE(out.find("/tmp/emf-plugins-b"), std::string::npos) << out;
+  EXPECT_NE(out.find(std::string(EMF_TEST_BINARY_DIR) + "/plugins"), std::string::npos) << out;
+  EXPECT_NE(out.find("EMF_PLUGIN_PATH"), std::string::npos) << out;  // says what to do
+  EXPECT_FALSE(std::filesystem::exists(out_dir));  // failed before anything started
+
+  EXPECT_EQ(test::runCommand(cli() + kTinyRun + " --detector /nonexistent/libx.so --out " + out_dir,
+                             &out),
+            1);
+  EXPECT_NE(out.find("'/nonexistent/libx.so' does not exist"), std::string::npos) << out;
+  EXPECT_EQ(test::runCommand(cli() + " run --detector", &out), 2);
+  EXPECT_NE(out.find("--detector needs a value"), std::string::npos) << out;
+}
+
+TEST(CliRun, HelpListsTheDetectorFlags) {
+  std::string out;
+  ASSERT_EQ(test::runCommand(cli() + " run --help", &out), 0);
+  EXPECT_NE(out.find("--detector NAME|PATH"), std::string::npos) << out;
+  EXPECT_NE(out.find("--detector-config STR"), std::string::npos) << out;
+}
+
+TEST(CliRun, WritesSummaryWithObjectsArrayAndImages) {
+  const std::string out_dir = test::tempDir("run-ok") + "/out";
+  std::string out;
+  ASSERT_EQ(test::runCommand(cli() + kTinyRun +
+                                 " --detector maskfile --detector-config dir=/tmp/x,y=1"
+                                 " --set output.write_images=true --out " +
+                                 out_dir,
+                             &out),
+            0)
+      << out;
+  const nlohmann::json j = nlohmann::json::parse(readText(out_dir + "/run.json"));
+  EXPECT_EQ(j["frames"], 3);
+  ASSERT_TRUE(j.contains("objects")) << j.dump(2);
+  EXPECT_TRUE(j["objects"].is_array());
+  EXPECT_FALSE(j.contains("error"));
+  EXPECT_EQ(io::readTrajectory(out_dir + "/camera.txt").size(), 3u);
+  // The static room has no objects: the overlay is the colour image, one per frame, 80x60.
+  for (const char* name : {"000000", "000001", "000002"}) {
+    EXPECT_TRUE(std::filesystem::exists(out_dir + "/images/" + name + "-objects.png")) << name;
+  }
+}
+
+TEST(CliRun, BrokenFrameKeepsTheOutputsOfTheFramesBefore) {
+  const std::string dir = test::tempDir("run-broken");
+  std::string out;
+  ASSERT_EQ(
+      test::runCommand(
+          cli() + " synth room --frames 5 --width 80 --height 60 --out " + dir + "/seq", &out),
+      0)
+      << out;
+  // Frame 3's depth image becomes garbage.
+  std::vector<std::filesystem::path> depth;
+  for (const auto& e : std::filesystem::directory_iterator(dir + "/seq/depth")) {
+    depth.push_back(e.path());
+  }
+  std::sort(depth.begin(), depth.end());
+  ASSERT_EQ(depth.size(), 5u);
+  std::ofstream(depth[3], std::ios::trunc) << "not a png";
+  const std::string out_dir = dir + "/out";
+  const std::string run = std::string(kTinyRun);
+  const std::string cmd = cli() + run.substr(0, run.find(" --source")) + " --source tum:" + dir +
+                          "/seq" + run.substr(run.find(" --set")) + " --out " + out_dir;
+  EXPECT_EQ(test::runCommand(cmd, &out), 1) << out;
+  EXPECT_NE(out.find("stopped after 3 frames"), std::string::npos) << out;
+  EXPECT_NE(out.find(depth[3].filename().string()), std::string::npos) << out;  // names the file
+  EXPECT_EQ(io::readTrajectory(out_dir + "/camera.txt").size(), 3u);
+  EXPECT_TRUE(std::filesystem::exists(out_dir + "/background.ply"));
+  const nlohmann::json j = nlohmann::json::parse(readText(out_dir + "/run.json"));
+  EXPECT_EQ(j["frames"], 3);
+  EXPECT_NE(j["error"].get<std::string>().find("stopped after 3 frames"), std::string::npos);
 }
 
 }  // namespace

@@ -1,0 +1,233 @@
+#include "pipeline/object_outputs.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <opencv2/imgproc.hpp>
+
+#include "common/error.h"
+#include "common/log.h"
+#include "io/atomic_file.h"
+#include "map/mesh.h"
+
+namespace emf::pipeline {
+
+namespace {
+
+// Golden angle as a fraction of the hue circle: successive ids land far apart in hue.
+constexpr double kGoldenHueStep = 0.381966011250105;
+
+}  // namespace
+
+cv::Vec3b objectColor(int id) {
+  const double hue = std::fmod(static_cast<double>(id) * kGoldenHueStep, 1.0);  // [0, 1)
+  // Alternate two saturation/value levels so neighbours in hue also differ in brightness.
+  const bool odd = (id % 2) != 0;
+  cv::Mat hsv(1, 1, CV_8UC3,
+              cv::Scalar(hue * 180.0, odd ? 255 : 200, odd ? 255 : 220));  // OpenCV H in [0, 180)
+  cv::Mat bgr;
+  cv::cvtColor(hsv, bgr, cv::COLOR_HSV2BGR);
+  return bgr.at<cv::Vec3b>(0, 0);
+}
+
+cv::Mat objectOverlay(const cv::Mat& color, const cv::Mat& object_ids) {
+  if (object_ids.type() != CV_32S) {
+    throw InvalidArgument("object id image must be CV_32S (got type " +
+                          std::to_string(object_ids.type()) + ")");
+  }
+  cv::Mat base;
+  if (color.empty()) {
+    base = cv::Mat(object_ids.size(), CV_8UC3, cv::Scalar(0, 0, 0));
+  } else if (color.type() != CV_8UC3) {
+    throw InvalidArgument("colour image must be CV_8UC3 BGR (got type " +
+                          std::to_string(color.type()) + ")");
+  } else if (color.size() != object_ids.size()) {
+    cv::resize(color, base, object_ids.size(), 0, 0, cv::INTER_LINEAR);
+  } else {
+    base = color.clone();
+  }
+  std::map<int32_t, cv::Vec3b> colors;  // objectColor() converts through a cv::Mat: once per id
+  for (int y = 0; y < base.rows; ++y) {
+    const int32_t* ids = object_ids.ptr<int32_t>(y);
+    cv::Vec3b* px = base.ptr<cv::Vec3b>(y);
+    for (int x = 0; x < base.cols; ++x) {
+      if (ids[x] <= 0) continue;
+      auto it = colors.find(ids[x]);
+      if (it == colors.end()) it = colors.emplace(ids[x], objectColor(ids[x])).first;
+      const cv::Vec3b c = it->second;
+      for (int ch = 0; ch < 3; ++ch) {
+        px[x][ch] =
+            cv::saturate_cast<uint8_t>((1.0 - kOverlayAlpha) * px[x][ch] + kOverlayAlpha * c[ch]);
+      }
+    }
+  }
+  return base;
+}
+
+cv::Mat associationFalseColor(const cv::Mat& q) {
+  if (q.type() != CV_32F) {
+    throw InvalidArgument("association map must be CV_32F (got type " + std::to_string(q.type()) +
+                          ")");
+  }
+  cv::Mat gray(q.size(), CV_8U);
+  cv::Mat valid(q.size(), CV_8U);
+  for (int y = 0; y < q.rows; ++y) {
+    const float* src = q.ptr<float>(y);
+    uint8_t* g = gray.ptr<uint8_t>(y);
+    uint8_t* v = valid.ptr<uint8_t>(y);
+    for (int x = 0; x < q.cols; ++x) {
+      const bool ok = std::isfinite(src[x]);
+      v[x] = ok ? 255 : 0;
+      g[x] = ok ? cv::saturate_cast<uint8_t>(std::lround(255.0 * std::clamp(src[x], 0.f, 1.f))) : 0;
+    }
+  }
+  cv::Mat out;
+  cv::applyColorMap(gray, out, cv::COLORMAP_JET);
+  out.setTo(cv::Scalar(0, 0, 0), valid == 0);
+  return out;
+}
+
+ObjectOutputs::ObjectOutputs(std::string dir, bool binary_ply)
+    : dir_(std::move(dir)), binary_ply_(binary_ply) {}
+
+std::string ObjectOutputs::trajectoryName(int id) {
+  return "object-" + std::to_string(id) + ".txt";
+}
+
+std::string ObjectOutputs::meshName(int id) { return "object-" + std::to_string(id) + ".ply"; }
+
+std::string ObjectOutputs::imageName(int64_t frame_index, const std::string& what) {
+  char index[32];
+  std::snprintf(index, sizeof(index), "%06lld", static_cast<long long>(frame_index));
+  return std::string("images/") + index + "-" + what + ".png";
+}
+
+void ObjectOutputs::ensureDir(const std::string& dir) const {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw IoError(dir + ": cannot create the output folder: " + ec.message());
+}
+
+void ObjectOutputs::add(const FrameOutcome& outcome) {
+  for (const ObjectOutcome& o : outcome.objects) {
+    Track& t = tracks_[o.id];
+    ObjectSummary& s = t.summary;
+    s.id = o.id;
+    if (!o.class_name.empty()) s.class_name = o.class_name;
+    s.existence = o.existence;
+    s.T_world_object = o.T_world_object;
+    switch (o.state) {
+      case ObjectState::kTracked:
+        if (s.first_frame < 0) {
+          s.first_frame = outcome.index;
+          s.first_timestamp = outcome.timestamp;
+        }
+        s.last_frame = outcome.index;
+        s.last_timestamp = outcome.timestamp;
+        ++s.frames_tracked;
+        // TUM files need increasing stamps: a repeated source timestamp keeps the first pose.
+        if (t.T_object_camera.empty() || outcome.timestamp > t.T_object_camera.stamps.back()) {
+          t.T_object_camera.append(outcome.timestamp, o.T_object_camera);
+        }
+        break;
+      case ObjectState::kLost:
+        ++s.frames_lost;
+        break;
+      case ObjectState::kInvisible:
+        ++s.frames_invisible;
+        break;
+      case ObjectState::kDeleted:
+        s.deleted = true;
+        s.deleted_frame = outcome.index;
+        s.deleted_timestamp = outcome.timestamp;
+        s.deleted_reason = o.deleted_reason;
+        break;
+    }
+  }
+}
+
+void ObjectOutputs::writeMesh(int id, const map::VolumeHostData& volume) {
+  ensureDir(dir_);
+  map::MeshOptions options;
+  options.world_frame = false;  // the object's own frame; T_world_object places it
+  const map::Mesh mesh = map::extractMesh(volume, options);
+  map::writePly(dir_ + "/" + meshName(id), mesh, binary_ply_);
+  Track& t = tracks_[id];
+  t.summary.id = id;
+  t.summary.mesh_file = meshName(id);
+}
+
+void ObjectOutputs::onObjectDeleted(int id, const map::Volume& volume) {
+  writeMesh(id, volume.download());
+}
+
+void ObjectOutputs::writeFrameImages(const FrameOutcome& outcome, const cv::Mat& color,
+                                     const cv::Mat& object_ids,
+                                     const std::vector<AssociationImage>& association) {
+  const std::string frame = "frame " + std::to_string(outcome.index);
+  if (!object_ids.empty() && object_ids.type() != CV_32S) {
+    throw InvalidArgument(frame + ": the rendered object ids must be CV_32S (got type " +
+                          std::to_string(object_ids.type()) + ")");
+  }
+  if (!color.empty() && color.type() != CV_8UC3) {
+    throw InvalidArgument(frame + ": the colour image must be CV_8UC3 BGR (got type " +
+                          std::to_string(color.type()) + ")");
+  }
+  for (const AssociationImage& a : association) {
+    if (a.q.type() != CV_32F) {
+      throw InvalidArgument(frame + ": association map of volume " + std::to_string(a.id) +
+                            " must be CV_32F (got type " + std::to_string(a.q.type()) + ")");
+    }
+    if (!object_ids.empty() && a.q.size() != object_ids.size()) {
+      throw InvalidArgument(frame + ": association map of volume " + std::to_string(a.id) + " is " +
+                            std::to_string(a.q.cols) + "x" + std::to_string(a.q.rows) +
+                            ", the id image " + std::to_string(object_ids.cols) + "x" +
+                            std::to_string(object_ids.rows));
+    }
+  }
+  ensureDir(dir_ + "/images");
+  if (!object_ids.empty()) {
+    io::writeImageAtomic(dir_ + "/" + imageName(outcome.index, "objects"),
+                         objectOverlay(color, object_ids));
+  } else if (!color.empty()) {
+    io::writeImageAtomic(dir_ + "/" + imageName(outcome.index, "objects"), color);
+  }
+  for (const AssociationImage& a : association) {
+    io::writeImageAtomic(dir_ + "/" + imageName(outcome.index, "q" + std::to_string(a.id)),
+                         associationFalseColor(a.q));
+  }
+}
+
+void ObjectOutputs::finish(const std::function<const map::Volume*(int id)>& volume_of) {
+  for (auto& [id, t] : tracks_) {
+    if (t.summary.deleted && t.summary.mesh_file.empty()) {
+      logWarning("object ", id, " was deleted in frame ", t.summary.deleted_frame,
+                 " without onObjectDeleted(): no ", meshName(id), " (its volume is gone)");
+    }
+    if (t.summary.deleted || !volume_of) continue;
+    if (const map::Volume* v = volume_of(id)) writeMesh(id, v->download());
+  }
+  writeTrajectories();
+}
+
+void ObjectOutputs::writeTrajectories() {
+  for (auto& [id, t] : tracks_) {
+    if (t.T_object_camera.empty()) continue;
+    ensureDir(dir_);
+    io::writeTrajectory(dir_ + "/" + trajectoryName(id), t.T_object_camera,
+                        "object " + std::to_string(id) + " (" + t.summary.class_name +
+                            "): T_object_camera, the camera pose in the object's frame (emf run)");
+    t.summary.trajectory_file = trajectoryName(id);
+  }
+}
+
+std::vector<ObjectSummary> ObjectOutputs::summaries() const {
+  std::vector<ObjectSummary> out;
+  out.reserve(tracks_.size());
+  for (const auto& [id, t] : tracks_) out.push_back(t.summary);
+  return out;
+}
+
+}  // namespace emf::pipeline
