@@ -67,8 +67,11 @@ int cmdRun(const std::vector<std::string>& args) {
   logInfo("source: ", src->describe(), "; device: ", ctx.device().device_name);
   pipeline::SlamSystem slam(ctx, config, k, source);
   pipeline::ObjectOutputs objects(out_dir, config.output.binary_ply);
-  // Images: the object ids are ray cast here at each frame's estimated pose (the E-step's
-  // association maps join once SlamSystem exposes them).
+  slam.setDeletionHook([&objects](const pipeline::TrackedObject& o) {
+    objects.onObjectDeleted(o.id, *o.volume);
+  });
+  // Images: the object ids are ray cast here at each frame's estimated pose; the association
+  // maps are those of the frame's last E-step.
   std::unique_ptr<map::RayCaster> id_renderer;
   if (config.output.write_images) {
     id_renderer = std::make_unique<map::RayCaster>(ctx, config.map, k.width, k.height);
@@ -103,7 +106,10 @@ int cmdRun(const std::vector<std::string>& args) {
         cv::Mat ids;
         id_renderer->render(slam.renderItems(), k, o.T_world_camera);
         id_renderer->download(nullptr, nullptr, &ids);
-        objects.writeFrameImages(o, frame.color, ids, {});
+        std::vector<pipeline::AssociationImage> maps;
+        const pipeline::SlamSystem::Associations a = slam.associations();
+        for (size_t i = 0; i < a.ids.size(); ++i) maps.push_back({a.ids[i], a.q[i]});
+        objects.writeFrameImages(o, frame.color, ids, maps);
       }
       ++n;
       if (!quiet) {
@@ -124,6 +130,7 @@ int cmdRun(const std::vector<std::string>& args) {
     if (!info.error.empty()) info.error += "; " + output_error;
   }
   info.objects = objects.summaries();
+  if (!config.detector.plugin.empty()) info.detector = slam.detectorStats();
   pipeline::writeRunOutputs(out_dir, slam, ctx, camera, info, config.output.binary_ply);
   if (!info.error.empty()) {
     std::fprintf(stderr, "emf run: error: %s\n(outputs of the frames done so far are in %s)\n",

@@ -132,7 +132,8 @@ void SlamSystem::integrateAll() {
   }
 }
 
-void SlamSystem::matchDetections(const std::vector<io::Detection>& detections, FrameOutcome* out) {
+void SlamSystem::matchDetections(const DetectionBatch& batch, FrameOutcome* out) {
+  const std::vector<io::Detection>& detections = batch.detections;
   const em::ObjectOptions& opt = config_.objects;
   std::vector<const io::Detection*> usable;
   for (const auto& d : detections) {
@@ -147,16 +148,28 @@ void SlamSystem::matchDetections(const std::vector<io::Detection>& detections, F
   out->detector_ran = true;
   out->detections = static_cast<int>(usable.size());
 
-  // Ray-cast object masks at the current poses (the background occludes).
+  // Ray-cast object masks (the background occludes) at the poses of the frame the detector ran
+  // on: the current ones, or for a late (async) result the poses it carries; objects created
+  // after that frame are not matched.
   last_ids_ = cv::Mat(intrinsics_.height, intrinsics_.width, CV_32S, cv::Scalar(-1));
+  const bool late = batch.frames_late > 0;
+  std::vector<Eigen::Isometry3d> current_poses;
   if (!objects_.empty()) {
     std::vector<map::RenderItem> items;
     items.push_back({background_.get(), 0, 0.0f});
-    for (const auto& o : objects_) {
+    for (auto& o : objects_) {
+      current_poses.push_back(o.volume->T_world_volume());
+      if (late) {
+        const auto it = std::find_if(batch.objects.begin(), batch.objects.end(),
+                                     [&](const ObjectPose& p) { return p.id == o.id; });
+        if (it == batch.objects.end()) continue;
+        o.volume->setPose(it->T_world_object);
+      }
       items.push_back({o.volume.get(), o.id, background_->spec().voxel_size_m});
     }
-    raycaster_.render(items, intrinsics_, T_world_camera_);
+    raycaster_.render(items, intrinsics_, batch.T_world_camera);
     raycaster_.download(nullptr, nullptr, &last_ids_);
+    for (size_t k = 0; k < objects_.size(); ++k) objects_[k].volume->setPose(current_poses[k]);
   }
   std::vector<std::vector<double>> iou(usable.size(), std::vector<double>(objects_.size(), 0.0));
   std::vector<cv::Mat> object_masks;

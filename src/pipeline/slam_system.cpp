@@ -47,13 +47,13 @@ const char* objectStateName(ObjectState state) {
 }
 
 const std::vector<std::string>& SlamSystem::stageNames() {
-  static const std::vector<std::string> kStages = {"preprocess",    "estep",     "track",
-                                                   "track_objects", "integrate", "objects"};
+  static const std::vector<std::string> kStages = {
+      "preprocess", "estep", "track", "track_objects", "detect", "objects", "integrate"};
   return kStages;
 }
 
 SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrinsics& intrinsics,
-                       const std::string& /*source_uri*/)
+                       const std::string& source_uri)
     : ctx_(ctx),
       config_(config),
       intrinsics_(intrinsics),
@@ -71,6 +71,9 @@ SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrins
   o.min_detection_px = static_cast<int>(std::lround(o.min_detection_px * scale));
   o.visibility_border_px = static_cast<int>(std::lround(o.visibility_border_px * scale));
   o.invisible_min_px = static_cast<int>(std::lround(o.invisible_min_px * scale * scale));
+  if (!config.detector.plugin.empty()) {
+    scheduler_ = std::make_unique<DetectorScheduler>(config.detector, source_uri, intrinsics);
+  }
   const map::VolumeSpec spec = map::VolumeSpec::background(config.map);
   background_ = std::make_unique<map::Volume>(
       *pool_, spec, map::backgroundVolumePose(config.map, spec, Eigen::Isometry3d::Identity()));
@@ -107,7 +110,8 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
   {
     ScopedStage s(timer_, "preprocess");
     preprocessor_.process(frame.depth);  // also keeps the raw depth on the device
-    if (!config_.objects.filter_depth && (!objects_.empty() || detections != nullptr)) {
+    if (!config_.objects.filter_depth &&
+        (!objects_.empty() || detections != nullptr || scheduler_ != nullptr)) {
       raw_preprocessor_.process(frame.depth);
     }
     ctx_.finish();  // stage times include the device work
@@ -152,9 +156,20 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
   }
   out.T_world_camera = T_world_camera_;
   if (!out.lost) {
+    std::optional<DetectionBatch> batch;
     if (detections) {
+      batch.emplace();
+      batch->frame_index = frame.index;
+      batch->timestamp = frame.timestamp;
+      batch->T_world_camera = T_world_camera_;
+      batch->detections = *detections;
+    } else if (scheduler_) {
+      ScopedStage s(timer_, "detect");
+      batch = runDetector(frame);
+    }
+    if (batch) {
       ScopedStage s(timer_, "objects");
-      matchDetections(*detections, &out);
+      matchDetections(*batch, &out);
       createObjects();
     }
     {
@@ -165,7 +180,7 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
     }
     {
       ScopedStage s(timer_, "objects");
-      if (detections) deleteByExistence();
+      if (out.detector_ran) deleteByExistence();
       if (!objects_.empty()) checkVisibility();
     }
   }
@@ -178,6 +193,32 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
 cl_mem SlamSystem::objectVertexMap() const {
   return config_.objects.filter_depth ? preprocessor_.vertexMap().get()
                                       : raw_preprocessor_.vertexMap().get();
+}
+
+DetectorStats SlamSystem::detectorStats() const {
+  return scheduler_ ? scheduler_->stats() : DetectorStats{};
+}
+
+std::optional<DetectionBatch> SlamSystem::runDetector(const io::Frame& frame) {
+  // Feedback for detectors that read the SLAM's state (motion): the background association and
+  // the residual, on the frames the detector may run on.
+  const bool may_run = scheduler_->async() || frame.index % config_.detector.every_n_frames == 0;
+  cv::Mat q0, residual;
+  if (may_run) {
+    if (estep_ids_.empty()) {  // no E-step this frame yet (no objects were tracked)
+      std::vector<Eigen::Isometry3d> T_oc;
+      for (const auto& o : objects_) {
+        T_oc.push_back(o.volume->T_world_volume().inverse() * T_world_camera_);
+      }
+      estep_.compute(objectVertexMap(), eStepVolumes(T_world_camera_, T_oc));
+    }
+    q0 = estep_.downloadQ(0);
+    residual = estep_.downloadResidual();
+  }
+  std::vector<ObjectPose> poses;
+  for (const auto& o : objects_) poses.push_back({o.id, o.volume->T_world_volume()});
+  return scheduler_->submit(frame, T_world_camera_, may_run ? &q0 : nullptr,
+                            may_run ? &residual : nullptr, &poses);
 }
 
 std::vector<ObjectOutcome> SlamSystem::objects() const {

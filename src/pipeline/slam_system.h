@@ -23,6 +23,7 @@
 #include "map/volume.h"
 #include "map/volume_view.h"
 #include "map/voxel_pool.h"
+#include "pipeline/detector_scheduler.h"
 #include "pipeline/stage_timer.h"
 #include "track/preprocess.h"
 #include "track/tracker.h"
@@ -104,9 +105,12 @@ class SlamSystem {
   ~SlamSystem();
 
   /// Processes one frame (depth CV_32F metres, NaN = invalid, of the intrinsics' size): the EM
-  /// loop of METHOD.md steps 1-6. `detections` (optional): instances detected on this frame
-  /// (e.g. by the caller's own detector), applied after tracking like a detector result.
-  /// Throws InvalidArgument naming the frame when its size or type is wrong.
+  /// loop of METHOD.md steps 1-6. The detector plugin of config detector.* (if any) runs on its
+  /// schedule (sequential: every N-th frame, now; async: on its own thread, its result applied
+  /// on the frame it arrives with object masks rendered at the poses of the frame it was
+  /// computed on). `detections` (optional): instances the caller detected on this very frame,
+  /// applied like a detector result. Throws InvalidArgument naming the frame when its size or
+  /// type is wrong.
   FrameOutcome process(const io::Frame& frame,
                        const std::vector<io::Detection>* detections = nullptr);
   const Eigen::Isometry3d& T_world_camera() const { return T_world_camera_; }
@@ -115,6 +119,8 @@ class SlamSystem {
   map::VoxelPool& pool() { return *pool_; }
   const map::VoxelPool& pool() const { return *pool_; }
   const StageTimer& timer() const { return timer_; }
+  /// The detector's counters (plugin empty when none is configured).
+  DetectorStats detectorStats() const;
   /// Objects alive now (as in the last FrameOutcome, without the deleted ones).
   std::vector<ObjectOutcome> objects() const;
   /// The volume of `id` (0 = background), or nullptr when no such object is alive.
@@ -150,7 +156,9 @@ class SlamSystem {
   void integrateAll();
   // Detection frame, before integration: match (ray-cast masks, IoU), existence counts,
   // foreground masks of the matched objects, growth. Keeps the unmatched detections.
-  void matchDetections(const std::vector<io::Detection>& detections, FrameOutcome* out);
+  void matchDetections(const DetectionBatch& batch, FrameOutcome* out);
+  // Runs the detector schedule for this frame; the batch to apply now, if any.
+  std::optional<DetectionBatch> runDetector(const io::Frame& frame);
   // Before integration: objects from the unmatched detections (each integrates this frame
   // weighted by its mask; the background then skips those pixels: created_mask_).
   void createObjects();
@@ -186,6 +194,7 @@ class SlamSystem {
   cv::Mat last_ids_;
   int next_object_id_ = 1;
   std::function<void(const TrackedObject&)> deletion_hook_;
+  std::unique_ptr<DetectorScheduler> scheduler_;  // null without a detector plugin
   StageTimer timer_;
   Eigen::Isometry3d T_world_camera_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d last_motion_ = Eigen::Isometry3d::Identity();  // T_prev_curr of the last frame
