@@ -76,14 +76,15 @@ Printed parse(const std::string& out) {
   return p;
 }
 
-/// `emf synth room` as a TUM folder of kFrames frames at 160x120.
-std::string writeFolder() {
-  const std::string dir = test::tempDir("example-room");
+/// `emf synth <preset>` as a TUM folder of kFrames frames at 160x120 (simulated detections in
+/// masks/).
+std::string writeFolder(const std::string& preset = "room") {
+  const std::string dir = test::tempDir("example-" + preset);
   std::string out;
-  const int rc =
-      test::runCommand(std::string(EMF_CLI_PATH) + " synth room --out " + dir + " --frames " +
-                           std::to_string(kFrames) + " --width 160 --height 120 --seed 3 --force",
-                       &out);
+  const int rc = test::runCommand(std::string(EMF_CLI_PATH) + " synth " + preset + " --out " + dir +
+                                      " --frames " + std::to_string(kFrames) +
+                                      " --width 160 --height 120 --seed 3 --force",
+                                  &out);
   EXPECT_EQ(rc, 0) << out;
   return dir;
 }
@@ -128,6 +129,19 @@ TEST(Example, TracksADatasetFolder) {
             "end frames=16 produced=16 dropped=0 callbacks=16 "
             "status=EMF_ERROR_END_OF_STREAM")
       << out;
+}
+
+// The cars preset: moving objects with detections in masks/. The camera poses must be right;
+// object lines (once the EM loop reports objects) must hold rigid poses.
+TEST(Example, TracksTheCarsDataset) {
+  const std::string dir = writeFolder("cars");
+  std::string out;
+  const int rc =
+      test::runCommand(std::string(EMF_EXAMPLE_PATH) + " tum:" + dir + " '" + kConfig + "'", &out);
+  ASSERT_EQ(rc, 0) << out;
+  const Printed p = parse(out);
+  ASSERT_EQ(p.frames.size(), static_cast<size_t>(kFrames)) << out;
+  expectPoses(p, dir);
 }
 
 #ifdef EMF_HAVE_OPENNI2  // built with EMF_WITH_OPENNI2 (the default)
