@@ -6,6 +6,7 @@
 #include "cl/cl_error.h"
 #include "common/error.h"
 #include "common/status_name.h"
+#include "firmware_host/sensor_error.h"
 
 namespace emf::capi {
 namespace {
@@ -29,6 +30,8 @@ emf_status translateCurrentException(const char* function) {
     throw;
   } catch (const ConfigError& e) {
     return fail(EMF_ERROR_CONFIG, where + e.what());
+  } catch (const fw::SensorDisconnected& e) {
+    return fail(EMF_ERROR_DEVICE, where + e.what());
   } catch (const IoError& e) {
     return fail(EMF_ERROR_IO, where + e.what());
   } catch (const cl::ClError& e) {
@@ -38,6 +41,10 @@ emf_status translateCurrentException(const char* function) {
                 where + e.what());
   } catch (const InvalidArgument& e) {
     return fail(EMF_ERROR_INVALID_ARGUMENT, where + e.what());
+  } catch (const StateError& e) {
+    return fail(EMF_ERROR_STATE, where + e.what());
+  } catch (const NotFoundError& e) {
+    return fail(EMF_ERROR_NOT_FOUND, where + e.what());
   } catch (const ResourceError& e) {
     return fail(EMF_ERROR_OUT_OF_MEMORY, where + e.what());
   } catch (const Error& e) {

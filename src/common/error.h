@@ -38,4 +38,17 @@ class ResourceError : public Error {
   using Error::Error;
 };
 
+/// A call is not valid in the object's current state (e.g. a runtime started after stop(), a
+/// frame processed before the intrinsics were set). The message says what to call first.
+class StateError : public Error {
+ public:
+  using Error::Error;
+};
+
+/// Something named by the caller does not exist (an object id, a device, a plugin).
+class NotFoundError : public Error {
+ public:
+  using Error::Error;
+};
+
 }  // namespace emf

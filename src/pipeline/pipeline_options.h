@@ -35,10 +35,15 @@ struct RuntimeOptions {
   int ring_slots = 4;
   /// drop_oldest (live) or block (replay, lossless).
   std::string ring_policy = "block";
+  /// Results kept for polling; when the poller is slower the oldest results are discarded
+  /// (counted as results_dropped), so a poll always returns the newest ones.
+  int result_queue = 32;
 
   void bind(OptionBinder& b) {
     b.integer("ring_slots", ring_slots, 2, 1024, "frames", "frame ring capacity");
     b.choice("ring_policy", ring_policy, {"drop_oldest", "block"}, "frame ring policy");
+    b.integer("result_queue", result_queue, 1, 100000, "results",
+              "results kept for polling (oldest discarded when full)");
   }
 };
 

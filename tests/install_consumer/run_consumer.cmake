@@ -35,3 +35,16 @@ if(NOT rc EQUAL 0)
   message(FATAL_ERROR "FAILED: pkg-config consumer exited ${rc}: ${out}")
 endif()
 message("consumer(pkg-config): ${out}")
+
+# The installed example builds standalone against the installed library and runs a tiny
+# synthetic source through the runtime.
+run(${CMAKE_COMMAND} -S ${prefix}/share/emf/examples -B ${WORK_DIR}/examples -G ${GENERATOR}
+    -DCMAKE_PREFIX_PATH=${prefix})
+run(${CMAKE_COMMAND} --build ${WORK_DIR}/examples)
+execute_process(COMMAND ${WORK_DIR}/examples/track_objects "synth:room?frames=2&width=64&height=48"
+                        "map: {memory_mb: 16}"
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR NOT out MATCHES "end frames=2 produced=2 dropped=0")
+  message(FATAL_ERROR "FAILED: installed example exited ${rc}: ${out}\n${err}")
+endif()
+message("example(installed): ${out}")
