@@ -375,6 +375,12 @@ TrackResult Tracker::track(const map::VolumeDeviceView& volume, cl_mem vertex_ma
     why << "inlier ratio " << result.inlier_ratio << " (" << ne.inliers << " of " << ne.valid
         << " points within the Huber delta) is below track.min_inlier_ratio "
         << options_.min_inlier_ratio;
+  } else if (recovering(volume.index) && result.inlier_ratio < options_.recovery_min_inlier_ratio) {
+    result.loss = TrackLoss::kFewInliers;
+    why << "recovering after a lost frame: inlier ratio " << result.inlier_ratio << " ("
+        << ne.inliers << " of " << ne.valid
+        << " points within the Huber delta) is below track.recovery_min_inlier_ratio "
+        << options_.recovery_min_inlier_ratio;
   } else if (result.inverse_condition < options_.min_inverse_condition) {
     result.loss = TrackLoss::kDegenerate;
     why << "degenerate geometry: inverse condition number " << result.inverse_condition
@@ -387,7 +393,14 @@ TrackResult Tracker::track(const map::VolumeDeviceView& volume, cl_mem vertex_ma
   }
   result.lost = result.loss != TrackLoss::kNone;
   result.loss_reason = why.str();
+  const auto it = std::find(lost_volumes_.begin(), lost_volumes_.end(), volume.index);
+  if (result.lost && it == lost_volumes_.end()) lost_volumes_.push_back(volume.index);
+  if (!result.lost && it != lost_volumes_.end()) lost_volumes_.erase(it);
   return result;
+}
+
+bool Tracker::recovering(cl_mem volume_index) const {
+  return std::find(lost_volumes_.begin(), lost_volumes_.end(), volume_index) != lost_volumes_.end();
 }
 
 }  // namespace emf::track

@@ -25,10 +25,13 @@
 //   valid / input < min_valid_fraction                 -> kFewValidPoints
 //   |T_init^-1 T| > max_motion_m or max_motion_deg     -> kLargeMotion
 //   inliers / valid < min_inlier_ratio                 -> kFewInliers
+//   recovering and inliers / valid < recovery_min_inlier_ratio -> kFewInliers
 //   balancedInverseCondition(H) < min_inverse_condition -> kDegenerate
 //   finest level ended at max_iterations (lost_if_not_converged) -> kNotConverged
 // A lost result still carries the estimate; the caller keeps its last good pose and does not
-// integrate the frame.
+// integrate the frame. "Recovering": the previous track() call on the same volume (identified
+// by its index buffer) was lost; the stricter inlier rule then applies until a call succeeds
+// (no relocalisation yet: a re-acquired pose near the last good one may be a wrong fit).
 #pragma once
 
 #include <Eigen/Geometry>
@@ -126,6 +129,9 @@ class Tracker {
   /// pixels not sampled at that stride keep stale values). Blocking read; for tests.
   cv::Mat lastPixelCosts() const;
 
+  /// True when the last track() call on the volume with this index buffer was lost.
+  bool recovering(cl_mem volume_index) const;
+
   const TrackOptions& options() const { return options_; }
   int width() const { return width_; }
   int height() const { return height_; }
@@ -160,6 +166,7 @@ class Tracker {
   cl::MemHandle costs_[2];  // per-pixel costs: accepted (current_) and candidate
   int current_ = 0;
   std::vector<float> host_partials_;
+  std::vector<cl_mem> lost_volumes_;  // index buffers of volumes whose last call was lost
 };
 
 /// Inverse condition number of H after balancing: the rotation block is scaled so that its

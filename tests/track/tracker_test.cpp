@@ -425,6 +425,9 @@ TEST_F(TrackerTest, IterationCapWithoutConvergenceIsLost) {
   TrackOptions o;
   o.coarse_levels = 0;
   o.max_iterations = 3;  // far too few from 5 cm / 5 degrees (tau 1e3 damps the first steps)
+  // Isolate the convergence rule: after 3 iterations the inlier ratio is ~0.6, which the
+  // default min_inlier_ratio (checked first) would already call lost.
+  o.min_inlier_ratio = 0.5;
   Tracker tracker(ctx(), o, room_->intrinsics.width, room_->intrinsics.height);
   std::mt19937 rng(81);
   const Eigen::Isometry3d init = perturb(room_->T_volume_camera_gt, rng, 0.05, 5 * kDeg);
@@ -439,6 +442,49 @@ TEST_F(TrackerTest, IterationCapWithoutConvergenceIsLost) {
   const TrackResult r2 = lenient.track(room_->device.view, pre.vertexMap().get(), nullptr, init);
   EXPECT_FALSE(r2.converged);
   EXPECT_FALSE(r2.lost) << r2.loss_reason;
+}
+
+TEST_F(TrackerTest, AfterALostFrameTheRecoveryInlierRatioApplies) {
+  const cv::Mat empty(room_->intrinsics.height, room_->intrinsics.width, CV_32F,
+                      cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  Preprocessor pre_empty(ctx(), PreprocessOptions{}, room_->intrinsics);
+  pre_empty.process(empty);
+  Preprocessor pre(ctx(), PreprocessOptions{}, room_->intrinsics);
+  pre.process(room_->depth);
+  TrackOptions o;
+  o.coarse_levels = 0;
+  o.max_iterations = 3;  // stops at an inlier ratio of ~0.6 (see IterationCapWithoutConvergence)
+  o.lost_if_not_converged = false;
+  o.min_inlier_ratio = 0.5;
+  o.recovery_min_inlier_ratio = 0.9;
+  std::mt19937 rng(81);
+  const Eigen::Isometry3d init = perturb(room_->T_volume_camera_gt, rng, 0.05, 5 * kDeg);
+  const cl_mem index = room_->device.view.index;
+  Tracker fresh(ctx(), o, room_->intrinsics.width, room_->intrinsics.height);
+  const TrackResult ok = fresh.track(room_->device.view, pre.vertexMap().get(), nullptr, init);
+  ASSERT_FALSE(ok.lost) << ok.loss_reason;
+  ASSERT_GT(ok.inlier_ratio, o.min_inlier_ratio);
+  ASSERT_LT(ok.inlier_ratio, o.recovery_min_inlier_ratio);
+  EXPECT_FALSE(fresh.recovering(index));
+
+  Tracker t(ctx(), o, room_->intrinsics.width, room_->intrinsics.height);
+  EXPECT_TRUE(t.track(room_->device.view, pre_empty.vertexMap().get(), nullptr, init).lost);
+  EXPECT_TRUE(t.recovering(index));
+  const TrackResult r = t.track(room_->device.view, pre.vertexMap().get(), nullptr, init);
+  EXPECT_TRUE(r.lost);
+  EXPECT_EQ(r.loss, TrackLoss::kFewInliers);
+  EXPECT_NEAR(r.inlier_ratio, ok.inlier_ratio, 1e-9);  // same computation, other verdict
+  EXPECT_NE(r.loss_reason.find("track.recovery_min_inlier_ratio"), std::string::npos)
+      << r.loss_reason;
+  // A frame tracked well ends the recovery.
+  o.max_iterations = 100;
+  Tracker t2(ctx(), o, room_->intrinsics.width, room_->intrinsics.height);
+  EXPECT_TRUE(t2.track(room_->device.view, pre_empty.vertexMap().get(), nullptr, init).lost);
+  const TrackResult good =
+      t2.track(room_->device.view, pre.vertexMap().get(), nullptr, room_->T_volume_camera_gt);
+  EXPECT_FALSE(good.lost) << good.loss_reason;
+  EXPECT_GE(good.inlier_ratio, o.recovery_min_inlier_ratio);
+  EXPECT_FALSE(t2.recovering(index));
 }
 
 TEST_F(TrackerTest, EmptyFrameIsLostWithoutDepth) {

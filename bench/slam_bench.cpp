@@ -1,0 +1,421 @@
+// slam_bench: the whole static SLAM loop (`emf run`) against Open3D's dense RGB-D SLAM as the
+// peer (bench/open3d_peer.py), on the same frames, per dataset and resolution configuration.
+//
+// For each dataset the frames (at most --frames, resized to the configuration's resolution)
+// are first written once as a TUM folder (depth uint16, 5000 units/m, plus ground truth); then
+// `emf run --source tum:<folder>` and `python3 bench/open3d_peer.py --data <folder>` run on it
+// as child processes, one after the other. Per system: ATE RMSE against the ground truth
+// (io::computeAte, as `emf eval`), ms per frame median/p90 (emf: SlamSystem's stage timer from
+// run.json; peer: its own per-frame clock; both exclude image loading), peak RSS (the child's
+// ru_maxrss from wait4) and, for emf, the voxel-pool memory. Ends with one line per dataset:
+//   slam_bench data=<name> res=WxH voxel_m=.. emf_ate_cm=.. emf_ms=.. emf_p90_ms=.. emf_lost=..
+//              peer_ate_cm=.. peer_ms=.. speedup=..
+// (speedup = peer median / emf median; peer fields are "nan" with --no-peer).
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "common/config.h"
+#include "common/error.h"
+#include "io/eval.h"
+#include "io/frame_source.h"
+#include "io/trajectory.h"
+#include "io/tum_writer.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Resolution {
+  int width = 640, height = 480;
+  double voxel_m = 0.01;
+  int volume_voxels = 512;  // 5.12 m at 1 cm, 5.12 m at 2 cm with 256
+};
+
+struct Args {
+  std::vector<std::string> data = {"redkitchen", "synth"};
+  int frames = 300;
+  Resolution res;
+  bool peer = true;
+  std::string out = "slam_bench_out";
+  std::string emf = EMF_CLI_PATH;
+  std::string python = "/usr/bin/python3";
+  std::string peer_script = EMF_BENCH_DIR "/open3d_peer.py";
+  std::string config;
+  std::vector<std::string> sets;
+  int peer_source_stride = 0;  // 0 = width / 160
+};
+
+void usage() {
+  std::printf(
+      "usage: slam_bench [options]\n"
+      "  --data LIST       comma-separated datasets: redkitchen, synth (synth:room), cabinet,\n"
+      "                    or a TUM folder path (default redkitchen,synth)\n"
+      "  --frames N        frames per dataset (default 300)\n"
+      "  --res R           640 (640x480 @ 1 cm, default) or 320 (320x240 @ 2 cm)\n"
+      "  --no-peer         run emf only\n"
+      "  --out DIR         work folder (default ./slam_bench_out)\n"
+      "  --emf PATH        emf executable (default the build's)\n"
+      "  --python PATH     interpreter for the peer (default /usr/bin/python3, Debian's Open3D)\n"
+      "  --config FILE     emf configuration passed to emf run\n"
+      "  --set S.K=V       emf configuration override (repeatable)\n"
+      "  --peer-stride N   frame pixels used by the peer's ICP (default width/160)\n");
+}
+
+Args parseArgs(int argc, char** argv) {
+  Args a;
+  for (int i = 1; i < argc; ++i) {
+    const std::string k = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw emf::InvalidArgument(k + " needs a value (see --help)");
+      return argv[++i];
+    };
+    if (k == "--help" || k == "-h") {
+      usage();
+      std::exit(0);
+    } else if (k == "--data") {
+      a.data.clear();
+      std::stringstream ss(value());
+      for (std::string item; std::getline(ss, item, ',');) {
+        if (!item.empty()) a.data.push_back(item);
+      }
+    } else if (k == "--frames") {
+      a.frames = std::stoi(value());
+      if (a.frames < 3) throw emf::InvalidArgument("--frames must be >= 3 (ATE needs 3 poses)");
+    } else if (k == "--res") {
+      const std::string r = value();
+      if (r == "640") {
+        a.res = Resolution{640, 480, 0.01, 512};
+      } else if (r == "320") {
+        a.res = Resolution{320, 240, 0.02, 256};
+      } else {
+        throw emf::InvalidArgument("--res " + r + ": use 640 (640x480@1cm) or 320 (320x240@2cm)");
+      }
+    } else if (k == "--no-peer") {
+      a.peer = false;
+    } else if (k == "--out") {
+      a.out = value();
+    } else if (k == "--emf") {
+      a.emf = value();
+    } else if (k == "--python") {
+      a.python = value();
+    } else if (k == "--config") {
+      a.config = value();
+    } else if (k == "--set") {
+      a.sets.push_back(value());
+    } else if (k == "--peer-stride") {
+      a.peer_source_stride = std::stoi(value());
+    } else {
+      std::fprintf(stderr, "slam_bench: unknown option %s (see --help)\n", k.c_str());
+      std::exit(2);
+    }
+  }
+  return a;
+}
+
+struct Dataset {
+  std::string name, uri;
+  double depth_scale = 5000;
+};
+
+Dataset resolveDataset(const std::string& d, const Resolution& res) {
+  const std::string shared = EMF_SHARED_DATA_DIR;
+  if (d == "redkitchen") return {"redkitchen-0-299", "tum:" + shared + "/redkitchen-0-299", 1000};
+  if (d == "cabinet") {
+    return {"tum-fr3-cabinet-keyframes", "tum:" + shared + "/tum-fr3-cabinet-keyframes", 5000};
+  }
+  if (d == "synth" || d == "synth:room") {
+    return {"synth-room",
+            "synth:room?width=" + std::to_string(res.width) +
+                "&height=" + std::to_string(res.height) + "&seed=1",
+            5000};
+  }
+  if (d.rfind("synth:", 0) == 0) return {d.substr(6), d, 5000};
+  return {fs::path(d).filename().string(), "tum:" + d, 5000};
+}
+
+/// 2x2-block depth down-sampling by an integer factor: mean of the valid samples within 3 cm
+/// of the nearest one (no blending across depth edges).
+cv::Mat downsampleDepth(const cv::Mat& depth, int factor) {
+  cv::Mat out(depth.rows / factor, depth.cols / factor, CV_32F);
+  for (int y = 0; y < out.rows; ++y) {
+    for (int x = 0; x < out.cols; ++x) {
+      float zmin = INFINITY;
+      for (int dy = 0; dy < factor; ++dy) {
+        for (int dx = 0; dx < factor; ++dx) {
+          const float z = depth.at<float>(y * factor + dy, x * factor + dx);
+          if (std::isfinite(z) && z > 0) zmin = std::min(zmin, z);
+        }
+      }
+      float sum = 0;
+      int n = 0;
+      for (int dy = 0; dy < factor; ++dy) {
+        for (int dx = 0; dx < factor; ++dx) {
+          const float z = depth.at<float>(y * factor + dy, x * factor + dx);
+          if (std::isfinite(z) && z > 0 && z - zmin < 0.03f) {
+            sum += z;
+            ++n;
+          }
+        }
+      }
+      out.at<float>(y, x) = n > 0 ? sum / n : NAN;
+    }
+  }
+  return out;
+}
+
+/// Writes the frames the two systems will read. Returns the frame count.
+int prepareFrames(const Dataset& d, const Args& a, const std::string& dir) {
+  emf::io::SourceOptions options;
+  options.depth_scale = d.depth_scale;
+  auto src = emf::io::openSource(d.uri, options);
+  const emf::io::Intrinsics k0 = src->intrinsics();
+  if (k0.width % a.res.width != 0 || k0.width / a.res.width != k0.height / a.res.height) {
+    throw emf::InvalidArgument(d.uri + ": " + std::to_string(k0.width) + "x" +
+                               std::to_string(k0.height) + " frames cannot be reduced to " +
+                               std::to_string(a.res.width) + "x" + std::to_string(a.res.height) +
+                               " by an integer factor");
+  }
+  const int factor = k0.width / a.res.width;
+  const emf::io::Intrinsics k = k0.scaled(a.res.width, a.res.height);
+  fs::remove_all(dir);
+  emf::io::TumWriterOptions wo;
+  wo.readme_about = "slam_bench frames of " + d.uri;
+  emf::io::TumWriter writer(dir, k, wo);
+  emf::io::Frame f;
+  int n = 0;
+  while (n < a.frames && src->next(f)) {
+    if (!f.T_world_camera_gt) {
+      throw emf::IoError(d.uri + ": frame " + std::to_string(f.index) +
+                         " has no ground-truth pose (slam_bench needs them for the ATE)");
+    }
+    if (factor > 1) {
+      f.depth = downsampleDepth(f.depth, factor);
+      if (!f.color.empty()) {
+        cv::resize(f.color, f.color, cv::Size(a.res.width, a.res.height), 0, 0, cv::INTER_AREA);
+      }
+    }
+    f.detections.reset();
+    f.T_world_object_gt.clear();
+    f.instance_ids.release();
+    writer.write(f);
+    ++n;
+  }
+  writer.finish();
+  return n;
+}
+
+struct ChildResult {
+  int exit_code = -1;
+  double peak_rss_mb = 0;
+  double wall_s = 0;
+};
+
+/// Runs argv as a child process (stdout/stderr to `log`), returns its exit code and peak RSS.
+ChildResult runChild(const std::vector<std::string>& argv, const std::string& log) {
+  std::vector<char*> cargv;
+  for (const auto& s : argv) cargv.push_back(const_cast<char*>(s.c_str()));
+  cargv.push_back(nullptr);
+  std::fflush(stdout);
+  const auto t0 = std::chrono::steady_clock::now();
+  const pid_t pid = fork();
+  if (pid < 0) throw emf::ResourceError(std::string("fork failed: ") + std::strerror(errno));
+  if (pid == 0) {
+    FILE* f = std::freopen(log.c_str(), "w", stdout);
+    if (f == nullptr || dup2(fileno(stdout), 2) < 0) _exit(126);
+    execv(cargv[0], cargv.data());
+    std::fprintf(stderr, "exec %s: %s\n", cargv[0], std::strerror(errno));
+    _exit(127);
+  }
+  int status = 0;
+  struct rusage ru {};
+  if (wait4(pid, &status, 0, &ru) < 0) {
+    throw emf::ResourceError(std::string("wait4 failed: ") + std::strerror(errno));
+  }
+  ChildResult r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  r.peak_rss_mb = ru.ru_maxrss / 1024.0;
+  r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return r;
+}
+
+std::string tail(const std::string& path, size_t max_chars = 2000) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string s = ss.str();
+  return s.size() > max_chars ? s.substr(s.size() - max_chars) : s;
+}
+
+nlohmann::json readJson(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw emf::IoError(path + ": cannot open");
+  return nlohmann::json::parse(in);
+}
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  const double pos = p * (v.size() - 1);
+  const size_t lo = static_cast<size_t>(std::floor(pos));
+  const size_t hi = std::min(lo + 1, v.size() - 1);
+  return v[lo] + (pos - lo) * (v[hi] - v[lo]);
+}
+
+struct SystemFigures {
+  bool ran = false;
+  double ate_cm = NAN, ms = NAN, p90_ms = NAN, rss_mb = NAN;
+  size_t poses = 0;
+  int lost = 0;
+};
+
+std::string fmt(double v, int decimals = 2) {
+  if (!std::isfinite(v)) return "nan";
+  char b[64];
+  std::snprintf(b, sizeof b, "%.*f", decimals, v);
+  return b;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    const Args a = parseArgs(argc, argv);
+    const emf::Config defaults;
+    fs::create_directories(a.out);
+    std::vector<std::string> lines;
+    std::printf("slam_bench: %dx%d @ %.0f cm, up to %d frames per dataset, peer %s\n", a.res.width,
+                a.res.height, a.res.voxel_m * 100, a.frames, a.peer ? "Open3D" : "off");
+    for (const std::string& name : a.data) {
+      const Dataset d = resolveDataset(name, a.res);
+      const std::string dir = fs::absolute(a.out + "/" + d.name).string();
+      const std::string frames_dir = dir + "/frames";
+      const int n = prepareFrames(d, a, frames_dir);
+      const emf::io::Trajectory gt = emf::io::readTrajectory(frames_dir + "/groundtruth.txt");
+      std::printf("\n== %s: %d frames (%s)\n", d.name.c_str(), n, d.uri.c_str());
+
+      // ---- emf ----
+      SystemFigures e;
+      std::vector<std::string> cmd = {
+          a.emf,
+          "run",
+          "--source",
+          "tum:" + frames_dir + "?depth_scale=5000",
+          "--out",
+          dir + "/emf",
+          "--quiet",
+          "--set",
+          "map.background_voxel_m=" + fmt(a.res.voxel_m, 3),
+          "--set",
+          "map.background_resolution=" + std::to_string(a.res.volume_voxels)};
+      if (!a.config.empty()) cmd.insert(cmd.begin() + 2, {"--config", a.config});
+      for (const auto& s : a.sets) cmd.insert(cmd.end(), {"--set", s});
+      const ChildResult er = runChild(cmd, dir + "/emf.log");
+      if (er.exit_code != 0) {
+        std::fprintf(stderr, "slam_bench: emf run failed (exit %d); its log %s ends:\n%s\n",
+                     er.exit_code, (dir + "/emf.log").c_str(), tail(dir + "/emf.log").c_str());
+        return 1;
+      }
+      const nlohmann::json run = readJson(dir + "/emf/run.json");
+      const emf::io::Trajectory est = emf::io::readTrajectory(dir + "/emf/camera.txt");
+      e.ran = true;
+      e.poses = est.size();
+      e.lost = run.at("lost_frames").get<int>();
+      e.ms = run.at("ms_per_frame").at("total").at("median_ms").get<double>();
+      e.p90_ms = run.at("ms_per_frame").at("total").at("p90_ms").get<double>();
+      e.rss_mb = er.peak_rss_mb;
+      if (est.size() >= emf::io::kMinAtePairs) {
+        e.ate_cm = emf::io::computeAte(gt, est).trans_m.rmse * 100;
+      }
+      const auto& mem = run.at("memory");
+      std::printf(
+          "emf:   ATE %s cm over %zu poses (%d lost), %s ms/frame median, %s p90, "
+          "peak RSS %.0f MB, pool %.0f MB (%lld of %lld blocks used), wall %.1f s\n",
+          fmt(e.ate_cm, 3).c_str(), e.poses, e.lost, fmt(e.ms).c_str(), fmt(e.p90_ms).c_str(),
+          e.rss_mb, mem.at("pool_bytes").get<double>() / (1 << 20),
+          mem.at("used_blocks").get<long long>(), mem.at("pool_blocks").get<long long>(),
+          er.wall_s);
+      std::printf("       stages (median / p90 ms):");
+      for (const auto& [stage, s] : run.at("ms_per_frame").items()) {
+        if (stage == "total") continue;
+        std::printf(" %s %s / %s", stage.c_str(), fmt(s.at("median_ms").get<double>()).c_str(),
+                    fmt(s.at("p90_ms").get<double>()).c_str());
+      }
+      std::printf("\n");
+      for (const auto& l : run.at("lost")) {
+        std::printf("       lost frame %lld: %s\n", l.at("index").get<long long>(),
+                    l.at("reason").get<std::string>().c_str());
+      }
+
+      // ---- peer ----
+      SystemFigures p;
+      if (a.peer) {
+        const int stride =
+            a.peer_source_stride > 0 ? a.peer_source_stride : std::max(1, a.res.width / 160);
+        std::vector<std::string> pcmd = {
+            a.python,          a.peer_script,
+            "--data",          frames_dir,
+            "--out",           dir + "/peer",
+            "--depth-scale",   "5000",
+            "--voxel",         fmt(a.res.voxel_m, 3),
+            "--trunc-voxels",  std::to_string(defaults.map.truncation_voxels),
+            "--depth-min",     fmt(defaults.preprocess.min_depth_m, 3),
+            "--depth-max",     fmt(defaults.preprocess.max_depth_m, 3),
+            "--source-stride", std::to_string(stride),
+            "--target-stride", std::to_string(std::max(1, stride / 2))};
+        const ChildResult pr = runChild(pcmd, dir + "/peer.log");
+        if (pr.exit_code != 0) {
+          std::fprintf(stderr, "slam_bench: the Open3D peer failed (exit %d); %s ends:\n%s\n",
+                       pr.exit_code, (dir + "/peer.log").c_str(), tail(dir + "/peer.log").c_str());
+          return 1;
+        }
+        const nlohmann::json pj = readJson(dir + "/peer/peer.json");
+        const emf::io::Trajectory pest = emf::io::readTrajectory(dir + "/peer/camera.txt");
+        const auto ms = pj.at("ms_per_frame").get<std::vector<double>>();
+        p.ran = true;
+        p.poses = pest.size();
+        p.ms = percentile(ms, 0.5);
+        p.p90_ms = percentile(ms, 0.9);
+        p.rss_mb = pr.peak_rss_mb;
+        p.ate_cm = emf::io::computeAte(gt, pest).trans_m.rmse * 100;
+        std::printf(
+            "peer:  ATE %s cm over %zu poses, %s ms/frame median, %s p90, peak RSS %.0f MB, "
+            "wall %.1f s\n       ran: %s\n",
+            fmt(p.ate_cm, 3).c_str(), p.poses, fmt(p.ms).c_str(), fmt(p.p90_ms).c_str(), p.rss_mb,
+            pr.wall_s, pj.at("ran").get<std::string>().c_str());
+        std::printf("ratio: ATE emf/peer %s, speed peer/emf %s, peak RSS emf/peer %s\n",
+                    fmt(e.ate_cm / p.ate_cm).c_str(), fmt(p.ms / e.ms).c_str(),
+                    fmt(e.rss_mb / p.rss_mb).c_str());
+      }
+      char line[512];
+      std::snprintf(line, sizeof line,
+                    "slam_bench data=%s res=%dx%d voxel_m=%.3f emf_ate_cm=%s emf_ms=%s "
+                    "emf_p90_ms=%s emf_lost=%d emf_rss_mb=%.0f peer_ate_cm=%s peer_ms=%s "
+                    "peer_rss_mb=%s speedup=%s",
+                    d.name.c_str(), a.res.width, a.res.height, a.res.voxel_m,
+                    fmt(e.ate_cm, 3).c_str(), fmt(e.ms).c_str(), fmt(e.p90_ms).c_str(), e.lost,
+                    e.rss_mb, fmt(p.ate_cm, 3).c_str(), fmt(p.ms).c_str(), fmt(p.rss_mb, 0).c_str(),
+                    fmt(p.ms / e.ms).c_str());
+      lines.push_back(line);
+    }
+    std::printf("\n");
+    for (const auto& l : lines) std::printf("%s\n", l.c_str());
+    return 0;
+  } catch (const std::exception& ex) {
+    std::fprintf(stderr, "slam_bench: %s\n", ex.what());
+    return 1;
+  }
+}
