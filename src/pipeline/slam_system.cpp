@@ -1,5 +1,6 @@
 #include "pipeline/slam_system.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "common/error.h"
@@ -23,6 +24,10 @@ track::TrackOptions objectTrackOptions(const track::TrackOptions& camera) {
   // has some association q > 0: the fraction of pixels landing on observed map says nothing
   // about the object. Its loss is judged by inliers, conditioning, motion and convergence.
   o.min_valid_fraction = 0.0;
+  // A small object's inliers are fewer and its silhouette pixels land off the model more
+  // often than the background's: the camera's stricter inlier rules would drop good frames.
+  o.min_inlier_ratio = std::min(o.min_inlier_ratio, 0.5);
+  o.recovery_min_inlier_ratio = o.min_inlier_ratio;
   return o;
 }
 
