@@ -34,7 +34,7 @@ namespace emf::pipeline {
 enum class ObjectState {
   kTracked,    // tracked and integrated this frame
   kLost,       // tracking failed this frame: pose kept, not integrated
-  kInvisible,  // alive but not seen this frame (rendered too few pixels)
+  kInvisible,  // alive but not seen this frame (not produced yet: invisible objects are deleted)
   kDeleted,    // deleted in this frame (reported once, then gone)
 };
 const char* objectStateName(ObjectState state);

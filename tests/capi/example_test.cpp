@@ -131,17 +131,26 @@ TEST(Example, TracksADatasetFolder) {
       << out;
 }
 
-// The cars preset: moving objects with detections in masks/. The camera poses must be right;
-// object lines (once the EM loop reports objects) must hold rigid poses.
+// The cars preset: moving objects with detections in masks/ replayed by the maskfile plugin
+// (frame 0). The camera poses must be right; both cars are created on the first frame and
+// printed, with rigid poses, on every frame.
 TEST(Example, TracksTheCarsDataset) {
   const std::string dir = writeFolder("cars");
   std::string out;
+  const std::string config = std::string(kConfig) + "\ndetector: {plugin: maskfile}";
   const int rc =
-      test::runCommand(std::string(EMF_EXAMPLE_PATH) + " tum:" + dir + " '" + kConfig + "'", &out);
+      test::runCommand(std::string(EMF_EXAMPLE_PATH) + " tum:" + dir + " '" + config + "'", &out);
   ASSERT_EQ(rc, 0) << out;
   const Printed p = parse(out);
   ASSERT_EQ(p.frames.size(), static_cast<size_t>(kFrames)) << out;
   expectPoses(p, dir);
+  EXPECT_EQ(p.objects.size(), static_cast<size_t>(2 * kFrames)) << out;
+  size_t cars = 0;
+  for (size_t pos = out.find("class=car"); pos != std::string::npos;
+       pos = out.find("class=car", pos + 1)) {
+    ++cars;
+  }
+  EXPECT_EQ(cars, p.objects.size()) << out;
 }
 
 #ifdef EMF_HAVE_OPENNI2  // built with EMF_WITH_OPENNI2 (the default)
