@@ -10,6 +10,7 @@
 # paper's "w/o assoc.") on the occlusion preset, and machine-readable lines
 #   objects_bench run=<name> camera_ate_cm=.. objects=<gt:ate_cm:coverage,..> ms=..
 set -euo pipefail
+export EMF_LOG_LEVEL=${EMF_LOG_LEVEL:-warning}
 
 EMF=build/bin/emf
 FRAMES=150
@@ -81,6 +82,9 @@ for p in "${LIST[@]}"; do
     run "$p-pfg" "$data" maskfile --set em.association=pfg
   fi
   if [[ "$p" == cars ]]; then
-    run "$p-motion" "$data" motion
+    # The motion detector needs more frequent calls than a trained one (a region must persist
+    # over two calls) and, at 320x240 with 2 cm background voxels, lower residual thresholds.
+    run "$p-motion" "$data" motion --set detector.every_n_frames=5 \
+      --detector-config "strong_residual_m=0.015,weak_residual_m=0.008,min_area_px=100"
   fi
 done

@@ -219,6 +219,20 @@ std::optional<DetectionBatch> SlamSystem::runDetector(const io::Frame& frame) {
     }
     q0 = estep_.downloadQ(0);
     residual = estep_.downloadResidual();
+    // q_0 is normalised over the volumes only, so with the background alone it is 1 wherever
+    // the background volume reaches. The detector gets what "explained by the background"
+    // means: at most the posterior of the background's inlier term against the outlier term.
+    const em::EmOptions& e = config_.em;
+    const double outlier = (1.0 - e.alpha) * e.p_uniform;
+    for (int v = 0; v < q0.rows; ++v) {
+      float* q = q0.ptr<float>(v);
+      const float* r = residual.ptr<float>(v);
+      for (int u = 0; u < q0.cols; ++u) {
+        if (!std::isfinite(r[u])) continue;
+        const double inlier = e.alpha / (2.0 * e.sigma_m) * std::exp(-r[u] / e.sigma_m);
+        q[u] = std::min(q[u], static_cast<float>(inlier / (inlier + outlier)));
+      }
+    }
   }
   std::vector<ObjectPose> poses;
   for (const auto& o : objects_) poses.push_back({o.id, o.volume->T_world_volume()});
