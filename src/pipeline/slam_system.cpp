@@ -28,6 +28,8 @@ track::TrackOptions objectTrackOptions(const track::TrackOptions& camera) {
   // often than the background's: the camera's stricter inlier rules would drop good frames.
   o.min_inlier_ratio = std::min(o.min_inlier_ratio, 0.5);
   o.recovery_min_inlier_ratio = o.min_inlier_ratio;
+  // Objects cover few pixels: all of them are used at the finest level.
+  o.pixel_stride = 1;
   return o;
 }
 
