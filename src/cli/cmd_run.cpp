@@ -67,9 +67,8 @@ int cmdRun(const std::vector<std::string>& args) {
   logInfo("source: ", src->describe(), "; device: ", ctx.device().device_name);
   pipeline::SlamSystem slam(ctx, config, k, source);
   pipeline::ObjectOutputs objects(out_dir, config.output.binary_ply);
-  slam.setDeletionHook([&objects](const pipeline::TrackedObject& o) {
-    objects.onObjectDeleted(o.id, *o.volume);
-  });
+  slam.setDeletionHook(
+      [&objects](const pipeline::TrackedObject& o) { objects.onObjectDeleted(o.id, *o.volume); });
   // Images: the object ids are ray cast here at each frame's estimated pose; the association
   // maps are those of the frame's last E-step.
   std::unique_ptr<map::RayCaster> id_renderer;

@@ -21,9 +21,9 @@ namespace {
 constexpr double kPerfectMeanRelativeM = 0.012;
 constexpr double kPerfectMeanRelativeDeg = 0.4;
 // Whole system, 90 frames of `cars` at 320x240 with the simulated detector every 30 frames.
-constexpr double kCameraAteM = 0.01;        // measured 1.8 mm
-constexpr double kObjectAteM = 0.05;        // measured 3.1-4.5 cm (issue target 1.5 cm: not met)
-constexpr double kObjectCoverage = 0.8;     // fraction of frames an object is tracked
+constexpr double kCameraAteM = 0.01;     // measured 1.8 mm
+constexpr double kObjectAteM = 0.05;     // measured 3.1-4.5 cm (issue target 1.5 cm: not met)
+constexpr double kObjectCoverage = 0.8;  // fraction of frames an object is tracked
 
 Config smallConfig() {
   Config c;
@@ -40,8 +40,8 @@ double angleDeg(const Eigen::Isometry3d& T) {
 TEST(SlamObjects, PerfectAssociationTracksTheCar) {
   const Config config = smallConfig();
   cl::Context ctx(config.cl);
-  auto src = io::openSource("synth:cars?frames=12&width=320&height=240&seed=1&noise=0",
-                            config.source);
+  auto src =
+      io::openSource("synth:cars?frames=12&width=320&height=240&seed=1&noise=0", config.source);
   const io::Intrinsics k = src->intrinsics();
   map::VoxelPool pool(ctx, config.map);
   track::Preprocessor pre(ctx, objectPreprocessOptions(config), k);
@@ -59,8 +59,7 @@ TEST(SlamObjects, PerfectAssociationTracksTheCar) {
     cv::Mat(f.instance_ids == gid).convertTo(mask, CV_32F, 1.0 / 255);
     ctx.write(q, mask.data, bytes);
     pre.process(f.depth);
-    const Eigen::Isometry3d T_oc_gt =
-        f.T_world_object_gt.at(gid).inverse() * *f.T_world_camera_gt;
+    const Eigen::Isometry3d T_oc_gt = f.T_world_object_gt.at(gid).inverse() * *f.T_world_camera_gt;
     Eigen::Isometry3d T_vc;
     if (!vol) {
       // 64^3 voxels of 0.7 cm centred on the object's origin, axes along the world's.
@@ -94,8 +93,8 @@ TEST(SlamObjects, PerfectAssociationTracksTheCar) {
     T_oc_gt_prev = T_oc_gt;
   }
   ASSERT_EQ(n, 11);
-  std::printf("perfect association: mean relative error %.4f m %.3f deg per frame\n",
-              sum_m / n, sum_deg / n);
+  std::printf("perfect association: mean relative error %.4f m %.3f deg per frame\n", sum_m / n,
+              sum_deg / n);
   EXPECT_LT(sum_m / n, kPerfectMeanRelativeM);
   EXPECT_LT(sum_deg / n, kPerfectMeanRelativeDeg);
 }
@@ -105,9 +104,9 @@ TEST(SlamObjects, CarsPresetWithSimulatedDetections) {
   const int frames = frames_env ? std::atoi(frames_env) : 90;
   const Config config = smallConfig();
   cl::Context ctx(config.cl);
-  auto src = io::openSource(
-      "synth:cars?frames=" + std::to_string(frames) + "&width=320&height=240&seed=1",
-      config.source);
+  auto src =
+      io::openSource("synth:cars?frames=" + std::to_string(frames) + "&width=320&height=240&seed=1",
+                     config.source);
   SlamSystem slam(ctx, config, src->intrinsics());
   io::Trajectory camera_gt, camera_est;
   std::map<int, io::Trajectory> object_gt, object_est;  // T_object_camera per frame
