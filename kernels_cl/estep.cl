@@ -22,9 +22,9 @@ __kernel void estep_likelihood(__global const float4* vertex, const int count, c
                                const float4 r1, const float4 r2, __global const int* index,
                                __global const int* count_index, const int has_counts,
                                const int4 dims, __global const short2* voxels,
-                               const float voxel_size, const float truncation,
-                               const float sigma, const float alpha, const float p_uniform,
-                               const float min_weight, const int pfg_mode, const int first, __global float* likelihood,
+                               const float voxel_size, const float truncation, const float sigma,
+                               const float alpha, const float p_uniform, const float min_weight,
+                               const int pfg_mode, const int first, __global float* likelihood,
                                __global float* sum, __global float* best,
                                __global float* residual) {
   const int u = get_global_id(0);
@@ -35,7 +35,8 @@ __kernel void estep_likelihood(__global const float4* vertex, const int count, c
   if (p4.w != 0.0f) {
     const float3 p = emf_transform(r0, r1, r2, p4.xyz);
     const float3 extent = (float3)((float)(dims.x * EMF_BLOCK), (float)(dims.y * EMF_BLOCK),
-                                   (float)(dims.z * EMF_BLOCK)) * voxel_size;
+                                   (float)(dims.z * EMF_BLOCK)) *
+                          voxel_size;
     if (p.x >= 0.0f && p.y >= 0.0f && p.z >= 0.0f && p.x < extent.x && p.y < extent.y &&
         p.z < extent.z) {
       float weight = 0.0f;
