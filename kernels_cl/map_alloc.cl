@@ -36,9 +36,8 @@
 
 __kernel void mark_blocks(__global const float* depth, const int width, const int height,
                           const float fx, const float fy, const float cx, const float cy,
-                          const float4 r0, const float4 r1, const float4 r2,
-                          const float block_size, const float truncation, const int4 dims,
-                          __global uchar* needed) {
+                          const float4 r0, const float4 r1, const float4 r2, const float block_size,
+                          const float truncation, const int4 dims, __global uchar* needed) {
   const int x = get_global_id(0);
   const int y = get_global_id(1);
   if (x >= width || y >= height) return;
@@ -53,9 +52,9 @@ __kernel void mark_blocks(__global const float* depth, const int width, const in
   const float3 dir = b - a;
   int4 cell = (int4)((int)floor(a.x), (int)floor(a.y), (int)floor(a.z), 0);
   const int4 end = (int4)((int)floor(b.x), (int)floor(b.y), (int)floor(b.z), 0);
-  const int4 step = (int4)(dir.x > 0.0f ? 1 : (dir.x < 0.0f ? -1 : 0),
-                           dir.y > 0.0f ? 1 : (dir.y < 0.0f ? -1 : 0),
-                           dir.z > 0.0f ? 1 : (dir.z < 0.0f ? -1 : 0), 0);
+  const int4 step =
+      (int4)(dir.x > 0.0f ? 1 : (dir.x < 0.0f ? -1 : 0), dir.y > 0.0f ? 1 : (dir.y < 0.0f ? -1 : 0),
+             dir.z > 0.0f ? 1 : (dir.z < 0.0f ? -1 : 0), 0);
   // Ray parameter (0..1 along the segment) of the next block face per axis, and per block.
   float3 t_max = (float3)(INFINITY, INFINITY, INFINITY);
   float3 t_delta = (float3)(INFINITY, INFINITY, INFINITY);

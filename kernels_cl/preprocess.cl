@@ -79,14 +79,14 @@ __kernel void preprocess_depth(__global const float* depth_in, __global float* d
   if (u0 + 7 < width) {
     vstore8(z, 0, depth_out + i0);
     for (int l = 0; l < 8; ++l) {
-      vertex[i0 + l] = isnan(zs[l]) ? (float4)(NAN, NAN, NAN, 0.0f)
-                                    : (float4)(xs[l], y * zs[l], zs[l], 1.0f);
+      vertex[i0 + l] =
+          isnan(zs[l]) ? (float4)(NAN, NAN, NAN, 0.0f) : (float4)(xs[l], y * zs[l], zs[l], 1.0f);
     }
   } else {
     for (int l = 0; l < 8 && u0 + l < width; ++l) {
       depth_out[i0 + l] = zs[l];
-      vertex[i0 + l] = isnan(zs[l]) ? (float4)(NAN, NAN, NAN, 0.0f)
-                                    : (float4)(xs[l], y * zs[l], zs[l], 1.0f);
+      vertex[i0 + l] =
+          isnan(zs[l]) ? (float4)(NAN, NAN, NAN, 0.0f) : (float4)(xs[l], y * zs[l], zs[l], 1.0f);
     }
   }
 }

@@ -86,9 +86,9 @@ __kernel void raycast_bounds(__global const int* index, const int4 dims, const f
   float u_lo = INFINITY, u_hi = -INFINITY, v_lo = INFINITY, v_hi = -INFINITY;
   bool straddles = false;
   for (int n = 0; n < 8; ++n) {
-    const float3 corner = (float3)((float)(b.x + (n & 1)) * block_m,
-                                   (float)(b.y + ((n >> 1) & 1)) * block_m,
-                                   (float)(b.z + ((n >> 2) & 1)) * block_m);
+    const float3 corner =
+        (float3)((float)(b.x + (n & 1)) * block_m, (float)(b.y + ((n >> 1) & 1)) * block_m,
+                 (float)(b.z + ((n >> 2) & 1)) * block_m);
     const float3 pc = emf_transform(r0, r1, r2, corner);
     z_lo = fmin(z_lo, pc.z);
     z_hi = fmax(z_hi, pc.z);
@@ -130,16 +130,15 @@ __kernel void raycast_bounds(__global const int* index, const int4 dims, const f
 }
 
 __kernel void raycast_volume(__global const int* index, __global const int* count_index,
-                             const int has_counts, const int4 dims,
-                             __global const short2* voxels, const float voxel_size,
-                             const float truncation, const float step_fraction, const float4 r0,
-                             const float4 r1, const float4 r2, const int width, const int height,
-                             const float fx, const float fy, const float cx, const float cy,
-                             const float near_z, const float far_z, const int volume_id,
-                             const float depth_margin, const int tiles_x,
-                             __global const int* tile_min, __global const int* tile_max,
-                             __global float* depth_out, __global float4* normal_out,
-                             __global int* id_out) {
+                             const int has_counts, const int4 dims, __global const short2* voxels,
+                             const float voxel_size, const float truncation,
+                             const float step_fraction, const float4 r0, const float4 r1,
+                             const float4 r2, const int width, const int height, const float fx,
+                             const float fy, const float cx, const float cy, const float near_z,
+                             const float far_z, const int volume_id, const float depth_margin,
+                             const int tiles_x, __global const int* tile_min,
+                             __global const int* tile_max, __global float* depth_out,
+                             __global float4* normal_out, __global int* id_out) {
   const int x = get_global_id(0);
   const int y = get_global_id(1);
   if (x >= width || y >= height) return;

@@ -32,11 +32,10 @@
 
 __kernel __attribute__((reqd_work_group_size(TRACK_LOCAL, 1, 1))) void track_accumulate(
     __global const float4* vertex, __global const float* q, const int width, const int height,
-    const int stride, const float4 r0, const float4 r1, const float4 r2,
-    __global const int* index, const int4 dims, __global const short2* voxels,
-    const float voxel_size, const float truncation, const float huber_delta,
-    __global const float* prev_cost, __global float* pixel_cost, const int compare,
-    __global float* partials) {
+    const int stride, const float4 r0, const float4 r1, const float4 r2, __global const int* index,
+    const int4 dims, __global const short2* voxels, const float voxel_size, const float truncation,
+    const float huber_delta, __global const float* prev_cost, __global float* pixel_cost,
+    const int compare, __global float* partials) {
   __local float shared[TRACK_TERMS * TRACK_LOCAL];
   const int lid = get_local_id(0);
   const int sw = (width + stride - 1) / stride;
@@ -62,8 +61,8 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LOCAL, 1, 1))) void track_acc
       pixel_cost[i] = NAN;
       if (!(p.w > 0.0f) || !(qu > 0.0f)) continue;
       input += 1.0f;
-      const float3 x = (float3)(dot(r0.xyz, p.xyz) + r0.w, dot(r1.xyz, p.xyz) + r1.w,
-                                dot(r2.xyz, p.xyz) + r2.w);
+      const float3 x =
+          (float3)(dot(r0.xyz, p.xyz) + r0.w, dot(r1.xyz, p.xyz) + r1.w, dot(r2.xyz, p.xyz) + r2.w);
       float weight;
       float3 grad;
       const float r =
@@ -74,8 +73,7 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LOCAL, 1, 1))) void track_acc
       const bool inlier = abs_r <= huber_delta;
       const float c = qu * weight;
       inliers += inlier ? 1.0f : 0.0f;
-      const float cost =
-          c * (inlier ? 0.5f * r * r : huber_delta * (abs_r - 0.5f * huber_delta));
+      const float cost = c * (inlier ? 0.5f * r * r : huber_delta * (abs_r - 0.5f * huber_delta));
       cost_sum += cost;
       pixel_cost[i] = cost;
       if (compare) {
@@ -109,7 +107,8 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LOCAL, 1, 1))) void track_acc
   }
   for (int k = 0; k < 27; ++k) {
     const float8 h = hg[k];
-    shared[k * TRACK_LOCAL + lid] = ((h.s0 + h.s1) + (h.s2 + h.s3)) + ((h.s4 + h.s5) + (h.s6 + h.s7));
+    shared[k * TRACK_LOCAL + lid] =
+        ((h.s0 + h.s1) + (h.s2 + h.s3)) + ((h.s4 + h.s5) + (h.s6 + h.s7));
   }
   shared[27 * TRACK_LOCAL + lid] = cost_sum;
   shared[28 * TRACK_LOCAL + lid] = valid;

@@ -21,35 +21,37 @@
 inline float emf_round_even(float x) { return (x + 12582912.0f) - 12582912.0f; }
 
 /// Camera-frame centre of voxel `lid` (0..511, x fastest) of block `lin`: pc = (xc, yc, zc).
-#define EMF_VOXEL_IN_CAMERA(lin, lid)                                                        \
-  const int plane = dims.x * dims.y;                                                       \
-  const int bz = (lin) / plane;                                                            \
-  const int by = ((lin)-bz * plane) / dims.x;                                              \
-  const int bx = (lin)-bz * plane - by * dims.x;                                           \
-  const float px_v = ((float)(bx * EMF_BLOCK + ((lid)&7)) + 0.5f) * voxel_size;            \
-  const float py_v = ((float)(by * EMF_BLOCK + (((lid) >> 3) & 7)) + 0.5f) * voxel_size;   \
-  const float pz_v = ((float)(bz * EMF_BLOCK + ((lid) >> 6)) + 0.5f) * voxel_size;         \
-  const float xc = r0.x * px_v + r0.y * py_v + r0.z * pz_v + r0.w;                         \
-  const float yc = r1.x * px_v + r1.y * py_v + r1.z * pz_v + r1.w;                         \
-  const float zc = r2.x * px_v + r2.y * py_v + r2.z * pz_v + r2.w;                         \
-  const float inv_z = 1.0f / zc;                                                           \
-  const float u = fx * (xc * inv_z) + cx + 0.5f;                                           \
-  const float v = fy * (yc * inv_z) + cy + 0.5f;                                           \
-  const bool in_view =                                                                     \
-      zc > 0.0f && u >= 0.0f && v >= 0.0f && u < (float)width && v < (float)height;        \
-  const int pixel = in_view ? (int)v * width + (int)u : 0;                                 \
-  const float d_meas = depth[pixel];                                                       \
-  const float sdf = d_meas - zc;                                                           \
-  /* NaN depth fails every comparison. */                                                  \
+#define EMF_VOXEL_IN_CAMERA(lin, lid)                                                    \
+  const int plane = dims.x * dims.y;                                                     \
+  const int bz = (lin) / plane;                                                          \
+  const int by = ((lin)-bz * plane) / dims.x;                                            \
+  const int bx = (lin)-bz * plane - by * dims.x;                                         \
+  const float px_v = ((float)(bx * EMF_BLOCK + ((lid)&7)) + 0.5f) * voxel_size;          \
+  const float py_v = ((float)(by * EMF_BLOCK + (((lid) >> 3) & 7)) + 0.5f) * voxel_size; \
+  const float pz_v = ((float)(bz * EMF_BLOCK + ((lid) >> 6)) + 0.5f) * voxel_size;       \
+  const float xc = r0.x * px_v + r0.y * py_v + r0.z * pz_v + r0.w;                       \
+  const float yc = r1.x * px_v + r1.y * py_v + r1.z * pz_v + r1.w;                       \
+  const float zc = r2.x * px_v + r2.y * py_v + r2.z * pz_v + r2.w;                       \
+  const float inv_z = 1.0f / zc;                                                         \
+  const float u = fx * (xc * inv_z) + cx + 0.5f;                                         \
+  const float v = fy * (yc * inv_z) + cy + 0.5f;                                         \
+  const bool in_view =                                                                   \
+      zc > 0.0f && u >= 0.0f && v >= 0.0f && u < (float)width && v < (float)height;      \
+  const int pixel = in_view ? (int)v * width + (int)u : 0;                               \
+  const float d_meas = depth[pixel];                                                     \
+  const float sdf = d_meas - zc;                                                         \
+  /* NaN depth fails every comparison. */                                                \
   const bool observed = in_view && d_meas > 0.0f && sdf >= -truncation;
 
-__kernel void integrate_blocks(
-    __global const int* block_list, __global const int* index, const int4 dims,
-    __global short2* voxels, __global const float* depth, __global const float* weights,
-    const int has_weights, const int width, const int height, const float fx, const float fy,
-    const float cx, const float cy, const float4 r0, const float4 r1, const float4 r2,
-    const float voxel_size, const float truncation, const float inv_truncation,
-    const float max_weight, const int free_space_full_weight) {
+__kernel void integrate_blocks(__global const int* block_list, __global const int* index,
+                               const int4 dims, __global short2* voxels,
+                               __global const float* depth, __global const float* weights,
+                               const int has_weights, const int width, const int height,
+                               const float fx, const float fy, const float cx, const float cy,
+                               const float4 r0, const float4 r1, const float4 r2,
+                               const float voxel_size, const float truncation,
+                               const float inv_truncation, const float max_weight,
+                               const int free_space_full_weight) {
   const int lin = block_list[get_group_id(0)];
   const int slot = index[lin];
   const int lid = get_local_id(0);

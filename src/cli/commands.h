@@ -23,7 +23,6 @@ int cmdEval(const std::vector<std::string>& args);
 int cmdSynth(const std::vector<std::string>& args);
 int cmdRun(const std::vector<std::string>& args);
 
-
 int cmdDevices(const std::vector<std::string>& args);
 
 }  // namespace emf::cli
