@@ -117,8 +117,12 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
   {
     ScopedStage s(timer_, "preprocess");
     preprocessor_.process(frame.depth);  // also keeps the raw depth on the device
+    // The raw vertex map only when the E-step or the object rules will read it this frame.
+    const bool detector_due =
+        scheduler_ != nullptr &&
+        (scheduler_->async() || frame.index % config_.detector.every_n_frames == 0);
     if (!config_.objects.filter_depth &&
-        (!objects_.empty() || detections != nullptr || scheduler_ != nullptr)) {
+        (!objects_.empty() || detections != nullptr || detector_due)) {
       raw_preprocessor_.process(frame.depth);
     }
     ctx_.finish();  // stage times include the device work
