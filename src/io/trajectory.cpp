@@ -65,7 +65,10 @@ void writeTrajectory(const std::string& path, const Trajectory& trajectory,
   char line[256];
   for (size_t i = 0; i < trajectory.size(); ++i) {
     const Eigen::Isometry3d& T = trajectory.poses[i];
+    // Normalised: a rotation composed over many frames drifts from orthonormal by round-off,
+    // and readers (ours included) reject quaternions whose norm is not 1.
     Eigen::Quaterniond q(T.rotation());
+    q.normalize();
     if (q.w() < 0) q.coeffs() = -q.coeffs();
     const Eigen::Vector3d t = T.translation();
     std::snprintf(line, sizeof(line), "%.6f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n",

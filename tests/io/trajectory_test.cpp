@@ -59,6 +59,25 @@ TEST(Trajectory, WriteReadRoundTripIsAtomic) {
   EXPECT_THROW(t.append(t.stamps.back(), Eigen::Isometry3d::Identity()), InvalidArgument);
 }
 
+// A rotation that drifted from orthonormal (round-off over a long run; here exaggerated to a
+// 1 % scale) is written as a unit quaternion, so that the file reads back.
+constexpr double kUnitQuaternionTol = 1e-8;
+constexpr double kDriftScale = 0.01;  // the rotation read back is the nearest one within that
+
+TEST(Trajectory, WritesUnitQuaternionsForDriftedRotations) {
+  const std::string dir = test::tempDir("traj_drift");
+  Trajectory t;
+  Eigen::Isometry3d T = makePose(0.5, 0.2, 1.0, 0.3, 0.1);
+  T.linear() *= 1.0 - kDriftScale;
+  t.append(1.0, T);
+  writeTrajectory(dir + "/object-1.txt", t);
+  const auto r = readTrajectory(dir + "/object-1.txt");
+  ASSERT_EQ(r.size(), 1u);
+  const Eigen::Matrix3d R = r.poses[0].rotation();
+  EXPECT_LT((R.transpose() * R - Eigen::Matrix3d::Identity()).norm(), kUnitQuaternionTol);
+  EXPECT_LT((R - makePose(0, 0, 0, 0.3, 0.1).rotation()).norm(), kDriftScale);
+}
+
 TEST(Trajectory, AcceptsCommasTabsAndComments) {
   const std::string path = test::tempDir("traj") + "/t.txt";
   writeText(path, "# c\n1.0,0,0,0,0,0,0,1\r\n\n2.0\t1 2 3 0 0 0 1\n");
