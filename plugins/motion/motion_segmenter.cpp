@@ -1,5 +1,6 @@
 #include "motion_segmenter.h"
 
+#include <algorithm>
 #include <cmath>
 #include <deque>
 #include <opencv2/imgproc.hpp>
@@ -59,6 +60,16 @@ bool MotionOptions::parse(const std::string& config, std::string* error) {
   return true;
 }
 
+int scaledMinArea(const MotionOptions& o, int w, int h) {
+  const double scale = static_cast<double>(w) * h / (640.0 * 480.0);
+  return std::max(1, static_cast<int>(std::lround(o.min_area_px * scale)));
+}
+
+int scaledOpenRadius(const MotionOptions& o, int w) {
+  if (o.open_radius_px <= 0) return 0;
+  return std::max(1, static_cast<int>(std::lround(o.open_radius_px * w / 640.0)));
+}
+
 namespace {
 
 bool validDepth(float d) { return std::isfinite(d) && d > 0.f; }
@@ -87,8 +98,10 @@ std::vector<MotionRegion> MotionSegmenter::segment(const cv::Mat& depth, const c
     }
   }
   const cv::Mat strong_raw = strong.clone();  // for the score, before the opening
-  if (options_.open_radius_px > 0) {
-    const int k = 2 * options_.open_radius_px + 1;
+  const int min_area = scaledMinArea(options_, w, h);
+  const int open_radius = scaledOpenRadius(options_, w);
+  if (open_radius > 0) {
+    const int k = 2 * open_radius + 1;
     cv::morphologyEx(strong, strong, cv::MORPH_OPEN,
                      cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
   }
@@ -121,8 +134,7 @@ std::vector<MotionRegion> MotionSegmenter::segment(const cv::Mat& depth, const c
           queue.push_back(q);
         }
       }
-      if (count < options_.min_area_px ||
-          count > options_.max_area_fraction * static_cast<double>(w) * h) {
+      if (count < min_area || count > options_.max_area_fraction * static_cast<double>(w) * h) {
         continue;
       }
       MotionRegion r;

@@ -15,11 +15,13 @@ struct MotionOptions {
   double max_association = 0.5;     // pixels with q_0 above this are explained by the background
   double depth_jump_m = 0.03;       // + depth_jump_rel * depth: a discontinuity between neighbours
   double depth_jump_rel = 0.03;
-  int min_area_px = 1600;          // smaller regions are noise
+  // Pixel sizes are for 640x480 images and scale with the image (area with width x height,
+  // radii with the width), as the host's object thresholds do.
+  int min_area_px = 1600;          // smaller regions are noise (40 x 40 px at 640x480)
   double max_area_fraction = 0.4;  // a larger region means the camera tracking failed
   int min_consecutive = 2;         // calls a region must persist before it is reported
   double persist_iou = 0.2;        // overlap linking a region to the previous call's
-  int open_radius_px = 2;          // morphological opening of the seed mask
+  int open_radius_px = 2;          // morphological opening of the seed mask (0 = off)
 
   /// Parses "key=value,key=value" (keys as above). Returns false and sets *error on bad input.
   bool parse(const std::string& config, std::string* error);
@@ -31,6 +33,11 @@ struct MotionRegion {
   float score = 0;  // fraction of strong-residual pixels in the region
   int age = 1;      // consecutive calls this region has been seen
 };
+
+/// min_area_px scaled to an image of w x h pixels (at least 1).
+int scaledMinArea(const MotionOptions& o, int w, int h);
+/// open_radius_px scaled to an image w pixels wide (0 stays 0, otherwise at least 1).
+int scaledOpenRadius(const MotionOptions& o, int w);
 
 class MotionSegmenter {
  public:

@@ -60,7 +60,9 @@ TEST(MotionSegmenter, SizeLimitsAndAssociation) {
   o.min_consecutive = 1;
   MotionSegmenter s(o);
   Scene sc;
-  sc.residual(cv::Rect(10, 10, 30, 30)).setTo(0.08f);  // 900 px < 1600: noise
+  // min_area_px 1600 at 640x480 is 400 px at 320x240: 19 x 19 = 361 px is noise.
+  ASSERT_EQ(scaledMinArea(o, kW, kH), 400);
+  sc.residual(cv::Rect(10, 10, 19, 19)).setTo(0.08f);
   EXPECT_TRUE(s.update(sc.depth, sc.residual, sc.q0).empty());
   sc.residual.setTo(0.08f);  // the whole image: tracking failure, not an object
   EXPECT_TRUE(s.update(sc.depth, sc.residual, sc.q0).empty());
@@ -73,6 +75,30 @@ TEST(MotionSegmenter, SizeLimitsAndAssociation) {
   // Invalid depth never belongs to a region.
   sc.depth(cv::Rect(100, 60, 80, 70)).setTo(std::nanf(""));
   EXPECT_TRUE(s.update(sc.depth, sc.residual, sc.q0).empty());
+}
+
+TEST(MotionSegmenter, PixelSizesScaleWithTheImage) {
+  MotionOptions o;  // min_area_px 1600, open_radius_px 2 (for 640x480)
+  EXPECT_EQ(scaledMinArea(o, 640, 480), 1600);
+  EXPECT_EQ(scaledMinArea(o, 1280, 960), 6400);
+  EXPECT_EQ(scaledMinArea(o, 160, 120), 100);
+  EXPECT_EQ(scaledOpenRadius(o, 640), 2);
+  EXPECT_EQ(scaledOpenRadius(o, 1280), 4);
+  EXPECT_EQ(scaledOpenRadius(o, 160), 1);  // never below 1 unless configured off
+  o.open_radius_px = 0;
+  EXPECT_EQ(scaledOpenRadius(o, 1280), 0);
+  o.min_area_px = 0;
+  EXPECT_EQ(scaledMinArea(o, 160, 120), 1);
+  // The same 30 x 30 px region is noise at 640x480 (< 1600 px) and a region at 320x240 (> 400).
+  for (const int w : {640, 320}) {
+    MotionOptions one;
+    one.min_consecutive = 1;
+    MotionSegmenter s(one);
+    const int h = w * 3 / 4;
+    cv::Mat depth(h, w, CV_32F, cv::Scalar(2.0f)), residual(h, w, CV_32F, cv::Scalar(0.002f));
+    residual(cv::Rect(10, 10, 30, 30)).setTo(0.08f);
+    EXPECT_EQ(s.update(depth, residual, cv::Mat()).size(), w == 640 ? 0u : 1u) << w;
+  }
 }
 
 TEST(MotionSegmenter, MovingRegionKeepsItsAge) {
