@@ -102,7 +102,16 @@ typedef struct emf_detector_api {
   void (*release)(emf_detector* detector, emf_detection_result* result);
   /** Destroys an instance. NULL is a no-op. */
   void (*destroy)(emf_detector* detector);
+  /** EMF_DETECTOR_FLAG_* bits. Added after the first release: the host reads it only when
+   *  struct_size covers it, so a plugin built without it means 0. */
+  uint32_t flags;
 } emf_detector_api;
+
+/** The detector reports only what the SLAM does not explain yet (e.g. `motion`): an existing
+ *  object it does not detect is no evidence that the object is gone, so the host does not
+ *  count NonEx for it (METHOD.md step 5). Without the flag every unmatched object gets
+ *  NonEx += 1 per call. */
+#define EMF_DETECTOR_FLAG_NEW_OBJECTS_ONLY 0x1u
 
 /** Type of the entry function. */
 typedef const emf_detector_api* (*emf_detector_entry_fn)(uint32_t host_abi_version);

@@ -147,7 +147,8 @@ const emf_detector_api kApi = {
     create,
     detect,
     release,
-    destroy};
+    destroy,
+    0u};
 
 }  // namespace
 

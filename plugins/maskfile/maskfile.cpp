@@ -184,7 +184,8 @@ const emf_detector_api kApi = {sizeof(emf_detector_api),
                                create,
                                detect,
                                release,
-                               destroy};
+                               destroy,
+                               0u};
 
 }  // namespace
 

@@ -117,7 +117,8 @@ const emf_detector_api kApi = {sizeof(emf_detector_api),
                                create,
                                detect,
                                release,
-                               destroy};
+                               destroy,
+                               EMF_DETECTOR_FLAG_NEW_OBJECTS_ONLY};
 
 }  // namespace
 

@@ -20,6 +20,8 @@ constexpr int32_t kMaxDetections = 4096;
 
 // Fields the host reads from each plugin struct (a smaller struct_size is an older/broken one).
 constexpr size_t kMinApiSize = offsetof(emf_detector_api, destroy) + sizeof(void*);
+// Plugins whose struct_size reaches this have the (later) flags field.
+constexpr size_t kApiSizeWithFlags = offsetof(emf_detector_api, flags) + sizeof(uint32_t);
 constexpr size_t kMinResultSize = offsetof(emf_detection_result, detections) + sizeof(void*);
 constexpr size_t kMinDetectionSize =
     offsetof(emf_detection, mask_probability) + sizeof(const float*);
@@ -138,9 +140,15 @@ DetectorPlugin::~DetectorPlugin() {
   if (handle_) dlclose(handle_);
 }
 
+bool DetectorPlugin::newObjectsOnly() const {
+  return api_ && api_->struct_size >= kApiSizeWithFlags &&
+         (api_->flags & EMF_DETECTOR_FLAG_NEW_OBJECTS_ONLY) != 0;
+}
+
 DetectorOutput DetectorPlugin::detect(const io::Frame& frame, const cv::Mat* background_association,
                                       const cv::Mat* residual) {
   DetectorOutput out;
+  out.new_objects_only = newObjectsOnly();
   const std::string who = "detector '" + name_ + "' frame " + std::to_string(frame.index);
   emf_detector_frame f{};
   f.struct_size = sizeof(f);

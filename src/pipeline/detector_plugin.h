@@ -25,6 +25,9 @@ struct DetectorOutput {
   std::vector<io::Detection> detections;  // valid detections, ids 1..n in plugin order
   std::vector<std::string> rejected;      // one message per dropped detection
   std::string error;                      // non-empty when the call failed as a whole
+  /// The detector reports only what the SLAM does not explain yet
+  /// (EMF_DETECTOR_FLAG_NEW_OBJECTS_ONLY): unmatched objects get no NonEx from this call.
+  bool new_objects_only = false;
 };
 
 /// The shared object for `name_or_path`: a path (contains '/' or ends in .so) is used as is;
@@ -51,6 +54,9 @@ class DetectorPlugin {
                         const cv::Mat* residual = nullptr);
 
   const std::string& name() const { return name_; }
+  /// The plugin's EMF_DETECTOR_FLAG_NEW_OBJECTS_ONLY (false for plugins built before the
+  /// flags field existed).
+  bool newObjectsOnly() const;
   const std::string& path() const { return path_; }
   /// Whether detect() logs each failure and dropped detection as a warning (default true). The
   /// DetectorScheduler turns it off and logs once per kind of problem instead.

@@ -140,6 +140,7 @@ void DetectorScheduler::runDetector(const Slot& slot, DetectionBatch* batch) {
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   batch->detector_ms = ms;
   batch->detections = std::move(out.detections);
+  batch->new_objects_only = out.new_objects_only;
   std::lock_guard<std::mutex> lock(mutex_);
   ++stats_.runs;
   detector_ms_.push_back(ms);

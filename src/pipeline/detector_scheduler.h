@@ -41,8 +41,9 @@ struct DetectionBatch {
   Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();  // camera pose of that frame
   std::vector<ObjectPose> objects;        // object poses of that frame (as given to submit())
   std::vector<io::Detection> detections;  // valid detections (CV_32F masks in [0, 1])
-  int64_t frames_late = 0;  // index of the submitting frame minus frame_index (0: sequential)
-  double detector_ms = 0;   // wall time of the plugin's detect() call
+  int64_t frames_late = 0;        // index of the submitting frame minus frame_index (0: sequential)
+  double detector_ms = 0;         // wall time of the plugin's detect() call
+  bool new_objects_only = false;  // DetectorOutput::new_objects_only of the call
 };
 
 /// Counters of a scheduler (for run.json and the C API's metrics).

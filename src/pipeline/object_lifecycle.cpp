@@ -215,8 +215,11 @@ void SlamSystem::matchDetections(const DetectionBatch& batch, FrameOutcome* out)
               o.volume->spec().dims_blocks.transpose() * map::kBlockSize, " voxels");
     }
   }
-  for (size_t k = 0; k < objects_.size(); ++k) {
-    if (!matched[k]) objects_[k].existence.non_ex += 1.0;
+  // A detector of new things only (motion) is silent about the objects it already created.
+  if (!batch.new_objects_only) {
+    for (size_t k = 0; k < objects_.size(); ++k) {
+      if (!matched[k]) objects_[k].existence.non_ex += 1.0;
+    }
   }
 }
 

@@ -82,6 +82,7 @@ TEST(DetectorScheduler, SequentialRunsOnEveryNthFrameWithThatFramesPoses) {
     ASSERT_EQ(b->detections.size(), 1u);
     EXPECT_NEAR(b->detections[0].score, 0.01 * static_cast<double>(i), 1e-6);
     EXPECT_EQ(b->detections[0].class_name, "car");
+    EXPECT_FALSE(b->new_objects_only);
   }
   EXPECT_EQ(batches, (std::vector<int64_t>{0, 3, 6, 9}));
   EXPECT_EQ(calls, batches);
@@ -95,6 +96,20 @@ TEST(DetectorScheduler, SequentialRunsOnEveryNthFrameWithThatFramesPoses) {
   EXPECT_EQ(st.results_delivered, 4);
   EXPECT_GE(st.detector_ms_max, st.detector_ms_median);
   EXPECT_FALSE(s.finish().has_value());  // nothing pending in sequential mode
+}
+
+TEST(DetectorScheduler, BatchCarriesTheNewObjectsOnlyFlag) {
+  DetectorScheduler s(
+      sequential(1), "motion-like",
+      [](const io::Frame&, const cv::Mat*, const cv::Mat*) {
+        DetectorOutput out;
+        out.new_objects_only = true;
+        return out;
+      },
+      smallCamera());
+  const auto b = s.submit(makeFrame(0), poseOf(0));
+  ASSERT_TRUE(b.has_value());
+  EXPECT_TRUE(b->new_objects_only);
 }
 
 TEST(DetectorScheduler, FeedbackImagesReachTheDetector) {

@@ -109,6 +109,25 @@ TEST(PluginHost, MalformedDetectionsAreDroppedGoodOneKept) {
   }
 }
 
+TEST(PluginHost, NewObjectsOnlyFlagIsReadWhenTheStructHasIt) {
+  // Flag set and the struct covers it: read; the malformed plugin does not set it; a plugin
+  // reporting the struct_size from before the flags field sets it in memory past its struct:
+  // the host must not read it.
+  EXPECT_TRUE(
+      DetectorPlugin::load("test_newonly", kTestPath, "", "", smallCamera())->newObjectsOnly());
+  EXPECT_FALSE(
+      DetectorPlugin::load("test_malformed", kTestPath, "", "", smallCamera())->newObjectsOnly());
+  auto old = DetectorPlugin::load("test_oldapi", kTestPath, "", "", smallCamera());
+  EXPECT_FALSE(old->newObjectsOnly());
+  EXPECT_FALSE(old->detect(frame(0, "1.000000")).new_objects_only);
+  auto p = DetectorPlugin::load("test_newonly", kTestPath, "", "", smallCamera());
+  const DetectorOutput out = p->detect(frame(0, "1.000000"));
+  EXPECT_TRUE(out.new_objects_only);
+  EXPECT_EQ(out.detections.size(), 1u);  // otherwise the malformed plugin's results
+  // The shipped motion plugin only proposes what the SLAM does not explain.
+  EXPECT_TRUE(DetectorPlugin::load("motion", kBuildPath, "", "", smallCamera())->newObjectsOnly());
+}
+
 // ---- maskfile ------------------------------------------------------------------------------
 
 void writeMasks(const std::string& dir, const std::string& stamp) {

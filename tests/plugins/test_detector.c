@@ -4,9 +4,13 @@
  *  2 "badabi": reports ABI version 999.
  *  3 "failing": create fails when config is "fail", detect always fails with a message.
  *  4 "noentry": exports no entry symbol.
- *  5 "refuses": entry returns NULL for every host version. */
+ *  5 "refuses": entry returns NULL for every host version.
+ *  6 "newonly": sets EMF_DETECTOR_FLAG_NEW_OBJECTS_ONLY.
+ *  7 "oldapi": sets the flag but reports the struct_size of a plugin built before the flags
+ *     field existed: the host must not read it. */
 #include <emf/emf_detector.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -101,14 +105,16 @@ static void destroy(emf_detector* d) {
   free(d);
 }
 
-static const emf_detector_api kApi = {sizeof(emf_detector_api),
-                                      TEST_PLUGIN_KIND == 2 ? 999u : EMF_DETECTOR_ABI_VERSION,
-                                      "test",
-                                      "test plugin",
-                                      create,
-                                      detect,
-                                      release,
-                                      destroy};
+static const emf_detector_api kApi = {
+    TEST_PLUGIN_KIND == 7 ? offsetof(emf_detector_api, flags) : sizeof(emf_detector_api),
+    TEST_PLUGIN_KIND == 2 ? 999u : EMF_DETECTOR_ABI_VERSION,
+    "test",
+    "test plugin",
+    create,
+    detect,
+    release,
+    destroy,
+    TEST_PLUGIN_KIND >= 6 ? EMF_DETECTOR_FLAG_NEW_OBJECTS_ONLY : 0u};
 
 EMF_DETECTOR_EXPORT const emf_detector_api* emf_detector_entry(uint32_t host_abi_version);
 EMF_DETECTOR_EXPORT const emf_detector_api* emf_detector_entry(uint32_t host_abi_version) {
