@@ -59,7 +59,11 @@ typedef struct emf_detector_frame {
   emf_image depth;    /**< EMF_PIXEL_DEPTH_F32, metres, NaN or 0 = invalid */
   emf_image color;    /**< EMF_PIXEL_BGR8; data may be NULL when the source has no colour */
   /** Optional feedback from the SLAM (data NULL when not provided), same size as depth:
-   *  background_association: EMF_PIXEL_F32, q_0(u) in [0, 1] (association to the background);
+   *  background_association: EMF_PIXEL_F32 in [0, 1], how well the background explains u:
+   *    the E-step's q_0(u), capped by the posterior of the background's inlier term against the
+   *    uniform outlier (q_0 alone is 1 wherever only the background reaches), and 1 where the
+   *    point lies behind the background's surface by more than em.sigma_m (a disocclusion:
+   *    something that stood there moved away);
    *  residual: EMF_PIXEL_F32, |psi| of the best-associated volume in metres (NaN = none). */
   emf_image background_association;
   emf_image residual;

@@ -80,6 +80,13 @@ SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrins
   o.invisible_min_px = static_cast<int>(std::lround(o.invisible_min_px * scale * scale));
   if (!config.detector.plugin.empty()) {
     scheduler_ = std::make_unique<DetectorScheduler>(config.detector, source_uri, intrinsics);
+    const size_t pixels = static_cast<size_t>(intrinsics.width) * intrinsics.height;
+    sdf_sampler_ = std::make_unique<map::SdfSampler>(ctx);
+    probe_points_ = ctx.buffer(CL_MEM_READ_ONLY, pixels * sizeof(cl_float4));
+    probe_psi_ = ctx.buffer(CL_MEM_WRITE_ONLY, pixels * sizeof(float));
+    probe_weight_ = ctx.buffer(CL_MEM_WRITE_ONLY, pixels * sizeof(float));
+    probe_gradient_ = ctx.buffer(CL_MEM_WRITE_ONLY, pixels * sizeof(cl_float4));
+    probe_pfg_ = ctx.buffer(CL_MEM_WRITE_ONLY, pixels * sizeof(float));
   }
   const map::VolumeSpec spec = map::VolumeSpec::background(config.map);
   background_ = std::make_unique<map::Volume>(
@@ -215,31 +222,7 @@ std::optional<DetectionBatch> SlamSystem::runDetector(const io::Frame& frame) {
   // the residual, on the frames the detector may run on.
   const bool may_run = scheduler_->async() || frame.index % config_.detector.every_n_frames == 0;
   cv::Mat q0, residual;
-  if (may_run) {
-    if (estep_ids_.empty()) {  // no E-step this frame yet (no objects were tracked)
-      std::vector<Eigen::Isometry3d> T_oc;
-      for (const auto& o : objects_) {
-        T_oc.push_back(o.volume->T_world_volume().inverse() * T_world_camera_);
-      }
-      estep_.compute(objectVertexMap(), eStepVolumes(T_world_camera_, T_oc));
-    }
-    q0 = estep_.downloadQ(0);
-    residual = estep_.downloadResidual();
-    // q_0 is normalised over the volumes only, so with the background alone it is 1 wherever
-    // the background volume reaches. The detector gets what "explained by the background"
-    // means: at most the posterior of the background's inlier term against the outlier term.
-    const em::EmOptions& e = config_.em;
-    const double outlier = (1.0 - e.alpha) * e.p_uniform;
-    for (int v = 0; v < q0.rows; ++v) {
-      float* q = q0.ptr<float>(v);
-      const float* r = residual.ptr<float>(v);
-      for (int u = 0; u < q0.cols; ++u) {
-        if (!std::isfinite(r[u])) continue;
-        const double inlier = e.alpha / (2.0 * e.sigma_m) * std::exp(-r[u] / e.sigma_m);
-        q[u] = std::min(q[u], static_cast<float>(inlier / (inlier + outlier)));
-      }
-    }
-  }
+  if (may_run) detectorFeedback(&q0, &residual);
   std::vector<ObjectPose> poses;
   for (const auto& o : objects_) poses.push_back({o.id, o.volume->T_world_volume()});
   return scheduler_->submit(frame, T_world_camera_, may_run ? &q0 : nullptr,

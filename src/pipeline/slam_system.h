@@ -159,6 +159,12 @@ class SlamSystem {
   void matchDetections(const DetectionBatch& batch, FrameOutcome* out);
   // Runs the detector schedule for this frame; the batch to apply now, if any.
   std::optional<DetectionBatch> runDetector(const io::Frame& frame);
+  /// The detector's feedback images for this frame (detector_feedback.cpp): *q0 = how well the
+  /// background explains each pixel, *residual = |psi| of the best-associated volume.
+  void detectorFeedback(cv::Mat* q0, cv::Mat* residual);
+  /// Signed background SDF (metres) at each valid vertex (CV_32FC4, camera frame); NaN where
+  /// unobserved (weight < em.min_weight), outside the grid or invalid.
+  cv::Mat backgroundSdf(const cv::Mat& vertex);
   // Before integration: objects from the unmatched detections (each integrates this frame
   // weighted by its mask; the background then skips those pixels: created_mask_).
   void createObjects();
@@ -185,16 +191,18 @@ class SlamSystem {
   cl::MemHandle fg_mask_;      // p_fg of the matched detection per pixel (count updates)
   cl::MemHandle new_weights_;  // mask probability of a new object (its first integration)
   std::vector<TrackedObject> objects_;
-  std::map<int, cv::Mat> pending_fg_;
-  std::vector<int> estep_ids_;  // volume ids of the last E-step (empty: none this frame)
-  cv::Mat created_mask_;        // union of the masks of objects created this frame (or empty)
+  std::map<int, cv::Mat> pending_fg_;  // id -> detection p_fg (CV_32F, NaN = no update)
+  std::vector<int> estep_ids_;         // volume ids of the last E-step (empty: none this frame)
+  cv::Mat created_mask_;  // union of the masks of objects created this frame (or empty)
   std::vector<io::Detection> unmatched_;    // this frame's detections that matched nothing
-  std::vector<ObjectOutcome> deleted_now_;  // objects deleted in this frame  // id -> detection
-                                            // p_fg (CV_32F, NaN = no update)
+  std::vector<ObjectOutcome> deleted_now_;  // objects deleted in this frame
   cv::Mat last_ids_;
   int next_object_id_ = 1;
   std::function<void(const TrackedObject&)> deletion_hook_;
   std::unique_ptr<DetectorScheduler> scheduler_;  // null without a detector plugin
+  // Background SDF probe for the detector feedback (allocated only with a detector).
+  std::unique_ptr<map::SdfSampler> sdf_sampler_;
+  cl::MemHandle probe_points_, probe_psi_, probe_weight_, probe_gradient_, probe_pfg_;
   StageTimer timer_;
   Eigen::Isometry3d T_world_camera_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d last_motion_ = Eigen::Isometry3d::Identity();  // T_prev_curr of the last frame

@@ -68,7 +68,7 @@ TEST(MotionSegmenter, SizeLimitsAndAssociation) {
   EXPECT_TRUE(s.update(sc.depth, sc.residual, sc.q0).empty());
   sc.residual.setTo(0.002f);
   sc.residual(cv::Rect(100, 60, 80, 70)).setTo(0.08f);
-  sc.q0 = cv::Mat(kH, kW, CV_32F, cv::Scalar(0.9f));  // explained by the background
+  sc.q0 = cv::Mat(kH, kW, CV_32F, cv::Scalar(1.0f));  // explained (e.g. a disocclusion)
   EXPECT_TRUE(s.update(sc.depth, sc.residual, sc.q0).empty());
   sc.q0.setTo(0.1f);
   EXPECT_EQ(s.update(sc.depth, sc.residual, sc.q0).size(), 1u);
