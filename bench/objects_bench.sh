@@ -4,11 +4,17 @@
 # (or `--detector motion` finds the movers itself), `emf eval` scores camera and objects.
 #
 #   bench/objects_bench.sh [--emf PATH] [--frames N] [--size WxH] [--out DIR] [--presets LIST]
+#   bench/objects_bench.sh --timing [--emf PATH] [--out DIR] [--sizes LIST]
 #
 # Prints per run: camera ATE, per ground-truth object the matched estimate's ATE and coverage,
 # ms per frame per stage (run.json), then the ablation table (association vs p_fg only, the
 # paper's "w/o assoc.") on the occlusion preset, and machine-readable lines
 #   objects_bench run=<name> camera_ate_cm=.. objects=<gt:ate_cm:coverage,..> ms=..
+# --timing: ms per frame by stage with 0, 1 and 3 objects alive, for each size (default
+# 320x240,640x480): 30 frames of the occlusion preset from frame 120 on (bear, suitcase and
+# chair in view; the maskfile detector runs on the first of them, so all objects are created
+# there), with objects.max_objects 0, 1 and 3. Prints lines
+#   objects_bench timing size=WxH objects=N alive=A total_ms=.. <stage>_ms=..
 set -euo pipefail
 export EMF_LOG_LEVEL=${EMF_LOG_LEVEL:-warning}
 
@@ -17,23 +23,72 @@ FRAMES=150
 SIZE=320x240
 OUT=out/objects_bench
 PRESETS="cars,occlusion"
+TIMING=0
+SIZES="320x240,640x480"
 while [[ $# -gt 0 ]]; do
   case "$1" in
+    --timing) TIMING=1; shift ;;
+    --sizes) SIZES="$2"; shift 2 ;;
     --emf) EMF="$2"; shift 2 ;;
     --frames) FRAMES="$2"; shift 2 ;;
     --size) SIZE="$2"; shift 2 ;;
     --out) OUT="$2"; shift 2 ;;
     --presets) PRESETS="$2"; shift 2 ;;
-    -h|--help) sed -n 2,12p "$0"; exit 0 ;;
+    -h|--help) sed -n 2,18p "$0"; exit 0 ;;
     *) echo "objects_bench: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
 [[ -x "$EMF" ]] || { echo "objects_bench: no emf binary at $EMF (build first or pass --emf)" >&2; exit 2; }
+mkdir -p "$OUT"
+
+background() {  # <width>: background at 2 cm for 320x240 and below (as the tests), else 1 cm
+  if [[ "$1" -le 320 ]]; then
+    echo "--set map.background_voxel_m=0.02 --set map.background_resolution=256"
+  fi
+}
+
+if [[ "$TIMING" == 1 ]]; then
+  IFS=, read -ra SIZE_LIST <<<"$SIZES"
+  for size in "${SIZE_LIST[@]}"; do
+    w=${size%x*}
+    h=${size#*x}
+    full="$OUT/data-occlusion-$size-150"
+    [[ -f "$full/groundtruth.txt" ]] ||
+      "$EMF" synth occlusion --out "$full" --frames 150 --width "$w" --height "$h" --force >/dev/null
+    # Frames [120, 150) (t >= 4 s) as their own TUM folder: lists filtered, image folders linked.
+    part="$OUT/data-occlusion-$size-120-150"
+    rm -rf "$part"
+    mkdir -p "$part"
+    for d in rgb depth masks objects; do ln -s "$(cd "$full" && pwd)/$d" "$part/$d"; done
+    cp "$full/calibration.txt" "$part/"
+    for f in rgb.txt depth.txt associations.txt groundtruth.txt; do
+      awk '/^#/ || ($1 + 0 >= 4.0 - 1e-6)' "$full/$f" >"$part/$f"
+    done
+    for n in 0 1 3; do
+      dir="$OUT/timing-$size-$n"
+      rm -rf "$dir"
+      read -ra bg <<<"$(background "$w")"
+      "$EMF" run --quiet --source "tum:$part" --detector maskfile --out "$dir" "${bg[@]}" \
+        --set objects.max_objects=$n >/dev/null
+      python3 - "$size" "$n" "$dir" <<'EOF'
+import json, sys
+size, n, run = sys.argv[1], sys.argv[2], sys.argv[3]
+j = json.load(open(run + "/run.json"))
+alive = sum(1 for o in j.get("objects", []) if o.get("state") != "deleted")
+st = j["ms_per_frame"]
+order = ["preprocess", "estep", "track", "track_objects", "detect", "objects", "integrate"]
+cells = " ".join(f"{k}_ms={st[k]['median_ms']:.1f}" for k in order if k in st)
+print(f"objects_bench timing size={size} objects={n} alive={alive} "
+      f"total_ms={st['total']['median_ms']:.1f} {cells}")
+EOF
+    done
+  done
+  exit 0
+fi
+
 W=${SIZE%x*}
 H=${SIZE#*x}
-# Background at 2 cm for 320x240 (as the tests), 1 cm otherwise.
-if [[ "$W" -le 320 ]]; then BG=(--set map.background_voxel_m=0.02 --set map.background_resolution=256); else BG=(); fi
-mkdir -p "$OUT"
+read -ra BG <<<"$(background "$W")"
 
 summary() {  # <name> <dataset> <run dir>
   local name=$1 data=$2 run=$3
