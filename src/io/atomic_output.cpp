@@ -6,6 +6,7 @@
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <opencv2/imgcodecs.hpp>
 
 #include "common/error.h"
 
@@ -22,9 +23,30 @@ std::string systemError() { return std::strerror(errno); }
 }  // namespace
 
 void writeFileAtomically(const std::string& path, const std::string& bytes) {
+  writeFileAtomically(path, bytes.data(), bytes.size());
+}
+
+void writeFileAtomically(const std::string& path, const void* data, size_t size) {
   AtomicOutputFile f(path);
-  f.write(bytes.data(), bytes.size());
+  f.write(data, size);
   f.commit();
+}
+
+void writeImageAtomically(const std::string& path, const cv::Mat& image,
+                          const std::vector<int>& params) {
+  const auto dot = path.rfind('.');
+  if (dot == std::string::npos || path.find('/', dot) != std::string::npos) {
+    throw IoError("cannot write image " + path + ": the file name has no extension (.png, .jpg)");
+  }
+  std::vector<uint8_t> bytes;
+  bool ok = false;
+  try {
+    ok = cv::imencode(path.substr(dot), image, bytes, params);
+  } catch (const cv::Exception& e) {
+    throw IoError("cannot encode image " + path + ": " + e.what());
+  }
+  if (!ok) throw IoError("cannot encode image " + path + " in format " + path.substr(dot));
+  writeFileAtomically(path, bytes.data(), bytes.size());
 }
 
 AtomicOutputFile::AtomicOutputFile(std::string path)

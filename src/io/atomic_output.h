@@ -3,14 +3,24 @@
 // complete, so a crash or an error never leaves a half-written file under the final name.
 #pragma once
 
+#include <cstddef>
 #include <cstdio>
+#include <opencv2/core.hpp>
 #include <string>
+#include <vector>
 
 namespace emf::io {
 
 /// Writes `bytes` to `path` atomically (temp file in the same folder + fsync + rename).
 /// Throws IoError naming the path and the system error.
 void writeFileAtomically(const std::string& path, const std::string& bytes);
+/// The same for `size` bytes at `data`.
+void writeFileAtomically(const std::string& path, const void* data, size_t size);
+
+/// Encodes `image` with OpenCV (format from the extension, e.g. .png) and writes it atomically.
+/// Throws IoError if the name has no extension or the image cannot be encoded in that format.
+void writeImageAtomically(const std::string& path, const cv::Mat& image,
+                          const std::vector<int>& params = {});
 
 /// A file being written atomically by streaming. Data goes to `<path>.tmp-<pid>-<n>`; commit()
 /// flushes, fsyncs and renames it to `path`. Destroying it without commit() removes the

@@ -9,7 +9,7 @@
 
 #include "common/error.h"
 #include "common/log.h"
-#include "io/atomic_file.h"
+#include "io/atomic_output.h"
 
 namespace emf::io {
 namespace fs = std::filesystem;
@@ -113,8 +113,8 @@ void TumWriter::write(const Frame& frame) {
   }
   const std::string rgb_file = "rgb/" + t_rgb + ".png";
   const std::string depth_file = "depth/" + t_depth + ".png";
-  writeImageAtomic((fs::path(dir_) / rgb_file).string(), frame.color, png);
-  writeImageAtomic((fs::path(dir_) / depth_file).string(), depth16, png);
+  writeImageAtomically((fs::path(dir_) / rgb_file).string(), frame.color, png);
+  writeImageAtomically((fs::path(dir_) / depth_file).string(), depth16, png);
   rgb_list_ += t_rgb + " " + rgb_file + "\n";
   depth_list_ += t_depth + " " + depth_file + "\n";
   associations_ += t_rgb + " " + rgb_file + " " + t_depth + " " + depth_file + "\n";
@@ -178,8 +178,8 @@ void TumWriter::write(const Frame& frame) {
                     static_cast<double>(d.score));
       lines += line;
     }
-    writeImageAtomic((fs::path(dir_) / "masks" / (t_depth + ".png")).string(), ids, png);
-    writeTextAtomic((fs::path(dir_) / "masks" / (t_depth + ".txt")).string(), lines);
+    writeImageAtomically((fs::path(dir_) / "masks" / (t_depth + ".png")).string(), ids, png);
+    writeFileAtomically((fs::path(dir_) / "masks" / (t_depth + ".txt")).string(), lines);
   }
   ++frames_;
 }
@@ -188,26 +188,28 @@ void TumWriter::finish() {
   if (finished_) return;
   finished_ = true;
   const fs::path d(dir_);
-  writeTextAtomic((d / "rgb.txt").string(), rgb_list_);
-  writeTextAtomic((d / "depth.txt").string(), depth_list_);
-  writeTextAtomic((d / "associations.txt").string(), associations_);
-  writeTextAtomic((d / "groundtruth.txt").string(), groundtruth_);
+  writeFileAtomically((d / "rgb.txt").string(), rgb_list_);
+  writeFileAtomically((d / "depth.txt").string(), depth_list_);
+  writeFileAtomically((d / "associations.txt").string(), associations_);
+  writeFileAtomically((d / "groundtruth.txt").string(), groundtruth_);
   char calib[256];
   std::snprintf(calib, sizeof(calib), "%.6f %.6f %.6f %.6f %d %d\n", intrinsics_.fx, intrinsics_.fy,
                 intrinsics_.cx, intrinsics_.cy, intrinsics_.width, intrinsics_.height);
-  writeTextAtomic((d / "calibration.txt").string(), calib);
+  writeFileAtomically((d / "calibration.txt").string(), calib);
   for (const auto& [id, lines] : object_world_) {
     const std::string header =
         "# object " + std::to_string(id) + ": T_world_object\n# timestamp tx ty tz qx qy qz qw\n";
-    writeTextAtomic((d / "objects" / ("gt-object-" + std::to_string(id) + "-world.txt")).string(),
-                    header + lines);
+    writeFileAtomically(
+        (d / "objects" / ("gt-object-" + std::to_string(id) + "-world.txt")).string(),
+        header + lines);
   }
   for (const auto& [id, lines] : object_camera_) {
     const std::string header = "# object " + std::to_string(id) +
                                ": T_object_camera (camera pose in the object's frame), frames "
                                "where the object is visible\n# timestamp tx ty tz qx qy qz qw\n";
-    writeTextAtomic((d / "objects" / ("gt-object-" + std::to_string(id) + "-camera.txt")).string(),
-                    header + lines);
+    writeFileAtomically(
+        (d / "objects" / ("gt-object-" + std::to_string(id) + "-camera.txt")).string(),
+        header + lines);
   }
   if (unrepresentable_depth_ > 0) {
     logWarning("TUM writer for ", dir_, ": ", unrepresentable_depth_,
@@ -246,7 +248,7 @@ void TumWriter::finish() {
       "Detection ids are per frame and are not object ids. `<t>` is the depth timestamp "
       "exactly as in depth.txt.\n\n"
       "Timestamps are seconds, written with 6 decimals; file names use the same text.\n";
-  writeTextAtomic((d / "README.md").string(), readme);
+  writeFileAtomically((d / "README.md").string(), readme);
 }
 
 }  // namespace emf::io

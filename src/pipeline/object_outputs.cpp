@@ -9,7 +9,7 @@
 
 #include "common/error.h"
 #include "common/log.h"
-#include "io/atomic_file.h"
+#include "io/atomic_output.h"
 #include "map/mesh.h"
 
 namespace emf::pipeline {
@@ -189,14 +189,14 @@ void ObjectOutputs::writeFrameImages(const FrameOutcome& outcome, const cv::Mat&
   }
   ensureDir(dir_ + "/images");
   if (!object_ids.empty()) {
-    io::writeImageAtomic(dir_ + "/" + imageName(outcome.index, "objects"),
-                         objectOverlay(color, object_ids));
+    io::writeImageAtomically(dir_ + "/" + imageName(outcome.index, "objects"),
+                             objectOverlay(color, object_ids));
   } else if (!color.empty()) {
-    io::writeImageAtomic(dir_ + "/" + imageName(outcome.index, "objects"), color);
+    io::writeImageAtomically(dir_ + "/" + imageName(outcome.index, "objects"), color);
   }
   for (const AssociationImage& a : association) {
-    io::writeImageAtomic(dir_ + "/" + imageName(outcome.index, "q" + std::to_string(a.id)),
-                         associationFalseColor(a.q));
+    io::writeImageAtomically(dir_ + "/" + imageName(outcome.index, "q" + std::to_string(a.id)),
+                             associationFalseColor(a.q));
   }
 }
 

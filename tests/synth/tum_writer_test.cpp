@@ -11,7 +11,7 @@
 #include <sstream>
 
 #include "common/error.h"
-#include "io/atomic_file.h"
+#include "io/atomic_output.h"
 #include "io/synth/synth_source.h"
 #include "test_support.h"
 
@@ -247,20 +247,22 @@ TEST(TumWriter, RejectsBadFramesNamingThem) {
 TEST(AtomicFile, ReplacesContentAndNamesUnwritablePaths) {
   const std::string dir = test::tempDir("atomic");
   const std::string path = dir + "/a.txt";
-  writeTextAtomic(path, "first");
-  writeTextAtomic(path, "second");
+  writeFileAtomically(path, "first");
+  writeFileAtomically(path, "second");
   EXPECT_EQ(lines(path, false), std::vector<std::string>{"second"});
   EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
   try {
-    writeTextAtomic(dir + "/missing/b.txt", "x");
+    writeFileAtomically(dir + "/missing/b.txt", "x");
     FAIL();
   } catch (const IoError& e) {
-    EXPECT_NE(std::string(e.what()).find("cannot write " + dir + "/missing/b.txt"),
-              std::string::npos)
+    // Names the destination and says what to check.
+    EXPECT_NE(std::string(e.what()).find("to write '" + dir + "/missing/b.txt'"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("check that the folder exists"), std::string::npos)
         << e.what();
   }
-  EXPECT_THROW(writeImageAtomic(dir + "/noext", cv::Mat(2, 2, CV_8U)), IoError);
-  writeImageAtomic(dir + "/img.png", cv::Mat(3, 4, CV_16U, cv::Scalar(4242)));
+  EXPECT_THROW(writeImageAtomically(dir + "/noext", cv::Mat(2, 2, CV_8U)), IoError);
+  writeImageAtomically(dir + "/img.png", cv::Mat(3, 4, CV_16U, cv::Scalar(4242)));
   const cv::Mat back = cv::imread(dir + "/img.png", cv::IMREAD_UNCHANGED);
   ASSERT_EQ(back.type(), CV_16U);
   EXPECT_EQ(back.at<uint16_t>(2, 3), 4242);
