@@ -116,6 +116,11 @@ typedef struct emf_detector_api {
  *  count NonEx for it (METHOD.md step 5). Without the flag every unmatched object gets
  *  NonEx += 1 per call. */
 #define EMF_DETECTOR_FLAG_NEW_OBJECTS_ONLY 0x1u
+/** The detector reads the SLAM feedback of emf_detector_frame (residual,
+ *  background_association). Without the flag the host does not compute it (saves downloads and
+ *  a background SDF probe per call) and passes those images with data NULL. Plugins built
+ *  before the flags field existed get the feedback. */
+#define EMF_DETECTOR_FLAG_READS_FEEDBACK 0x2u
 
 /** Type of the entry function. */
 typedef const emf_detector_api* (*emf_detector_entry_fn)(uint32_t host_abi_version);

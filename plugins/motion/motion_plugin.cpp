@@ -110,15 +110,16 @@ void release(emf_detector* det, emf_detection_result* result) {
 
 void destroy(emf_detector* det) { delete det; }
 
-const emf_detector_api kApi = {sizeof(emf_detector_api),
-                               EMF_DETECTOR_ABI_VERSION,
-                               "motion",
-                               "proposes badly explained, persistent regions as moving objects",
-                               create,
-                               detect,
-                               release,
-                               destroy,
-                               EMF_DETECTOR_FLAG_NEW_OBJECTS_ONLY};
+const emf_detector_api kApi = {
+    sizeof(emf_detector_api),
+    EMF_DETECTOR_ABI_VERSION,
+    "motion",
+    "proposes badly explained, persistent regions as moving objects",
+    create,
+    detect,
+    release,
+    destroy,
+    EMF_DETECTOR_FLAG_NEW_OBJECTS_ONLY | EMF_DETECTOR_FLAG_READS_FEEDBACK};
 
 }  // namespace
 

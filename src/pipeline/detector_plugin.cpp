@@ -145,6 +145,12 @@ bool DetectorPlugin::newObjectsOnly() const {
          (api_->flags & EMF_DETECTOR_FLAG_NEW_OBJECTS_ONLY) != 0;
 }
 
+bool DetectorPlugin::readsFeedback() const {
+  if (!api_) return false;
+  if (api_->struct_size < kApiSizeWithFlags) return true;
+  return (api_->flags & EMF_DETECTOR_FLAG_READS_FEEDBACK) != 0;
+}
+
 DetectorOutput DetectorPlugin::detect(const io::Frame& frame, const cv::Mat* background_association,
                                       const cv::Mat* residual) {
   DetectorOutput out;

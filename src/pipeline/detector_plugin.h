@@ -57,6 +57,9 @@ class DetectorPlugin {
   /// The plugin's EMF_DETECTOR_FLAG_NEW_OBJECTS_ONLY (false for plugins built before the
   /// flags field existed).
   bool newObjectsOnly() const;
+  /// The plugin's EMF_DETECTOR_FLAG_READS_FEEDBACK (true for plugins built before the flags
+  /// field existed: they may read it).
+  bool readsFeedback() const;
   const std::string& path() const { return path_; }
   /// Whether detect() logs each failure and dropped detection as a warning (default true). The
   /// DetectorScheduler turns it off and logs once per kind of problem instead.

@@ -91,6 +91,9 @@ class DetectorScheduler {
   DetectorScheduler& operator=(const DetectorScheduler&) = delete;
 
   bool enabled() const { return static_cast<bool>(detect_); }
+  /// Whether the detector reads the feedback images of submit() (a plugin's
+  /// EMF_DETECTOR_FLAG_READS_FEEDBACK; always true for a DetectFunction).
+  bool readsFeedback() const { return plugin_ ? plugin_->readsFeedback() : true; }
   bool async() const { return async_; }
 
   /// Call once per frame after tracking, with the frame's camera pose and the object poses

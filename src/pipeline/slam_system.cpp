@@ -80,6 +80,8 @@ SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrins
   o.invisible_min_px = static_cast<int>(std::lround(o.invisible_min_px * scale * scale));
   if (!config.detector.plugin.empty()) {
     scheduler_ = std::make_unique<DetectorScheduler>(config.detector, source_uri, intrinsics);
+  }
+  if (scheduler_ && scheduler_->readsFeedback()) {
     const size_t pixels = static_cast<size_t>(intrinsics.width) * intrinsics.height;
     sdf_sampler_ = std::make_unique<map::SdfSampler>(ctx);
     probe_points_ = ctx.buffer(CL_MEM_READ_ONLY, pixels * sizeof(cl_float4));
@@ -220,13 +222,14 @@ DetectorStats SlamSystem::detectorStats() const {
 std::optional<DetectionBatch> SlamSystem::runDetector(const io::Frame& frame) {
   // Feedback for detectors that read the SLAM's state (motion): the background association and
   // the residual, on the frames the detector may run on.
-  const bool may_run = scheduler_->async() || frame.index % config_.detector.every_n_frames == 0;
+  const bool feedback = scheduler_->readsFeedback() &&
+                        (scheduler_->async() || frame.index % config_.detector.every_n_frames == 0);
   cv::Mat q0, residual;
-  if (may_run) detectorFeedback(&q0, &residual);
+  if (feedback) detectorFeedback(&q0, &residual);
   std::vector<ObjectPose> poses;
   for (const auto& o : objects_) poses.push_back({o.id, o.volume->T_world_volume()});
-  return scheduler_->submit(frame, T_world_camera_, may_run ? &q0 : nullptr,
-                            may_run ? &residual : nullptr, &poses);
+  return scheduler_->submit(frame, T_world_camera_, feedback ? &q0 : nullptr,
+                            feedback ? &residual : nullptr, &poses);
 }
 
 std::vector<ObjectOutcome> SlamSystem::objects() const {

@@ -124,8 +124,14 @@ TEST(PluginHost, NewObjectsOnlyFlagIsReadWhenTheStructHasIt) {
   const DetectorOutput out = p->detect(frame(0, "1.000000"));
   EXPECT_TRUE(out.new_objects_only);
   EXPECT_EQ(out.detections.size(), 1u);  // otherwise the malformed plugin's results
-  // The shipped motion plugin only proposes what the SLAM does not explain.
-  EXPECT_TRUE(DetectorPlugin::load("motion", kBuildPath, "", "", smallCamera())->newObjectsOnly());
+  // The shipped motion plugin only proposes what the SLAM does not explain, from its feedback.
+  auto motion = DetectorPlugin::load("motion", kBuildPath, "", "", smallCamera());
+  EXPECT_TRUE(motion->newObjectsOnly());
+  EXPECT_TRUE(motion->readsFeedback());
+  // READS_FEEDBACK: not set by test_newonly; assumed for a plugin without the flags field.
+  EXPECT_FALSE(
+      DetectorPlugin::load("test_newonly", kTestPath, "", "", smallCamera())->readsFeedback());
+  EXPECT_TRUE(old->readsFeedback());
 }
 
 // ---- maskfile ------------------------------------------------------------------------------
