@@ -29,16 +29,39 @@
 
 #define TRACK_TERMS 34
 #define TRACK_MAX_TERM 31
+// Work-group shape in work items; each item handles 16 consecutive sampled columns of a row.
 #ifndef TRACK_LX
-#define TRACK_LX 32
+#define TRACK_LX 2
 #endif
 #ifndef TRACK_LY
 #define TRACK_LY 8
 #endif
-#define TRACK_LOCAL (TRACK_LX * TRACK_LY)
-#if TRACK_LOCAL != 256
-#error "track_accumulate's final reduction is written for 256 work items per group"
+#define TRACK_ITEMS (TRACK_LX * TRACK_LY)
+#if TRACK_ITEMS != 16
+#error "track_accumulate's final reduction is written for 16 work items per group"
 #endif
+
+// Sum (max for TRACK_MAX_TERM) of term t over the 16 items' vectors of a group, then over
+// the 16 lanes, written to row[t].
+__attribute__((always_inline)) inline void track_reduce_term(__local const float16* shared, int t,
+                                                             __global float* row) {
+  __local const float16* col = shared + TRACK_ITEMS * t;
+  if (t == TRACK_MAX_TERM) {
+    float16 s = fmax(fmax(fmax(col[0], col[1]), fmax(col[2], col[3])),
+                     fmax(fmax(col[4], col[5]), fmax(col[6], col[7])));
+    s = fmax(s, fmax(fmax(fmax(col[8], col[9]), fmax(col[10], col[11])),
+                     fmax(fmax(col[12], col[13]), fmax(col[14], col[15]))));
+    const float8 s8 = fmax(s.lo, s.hi);
+    const float4 s4 = fmax(s8.lo, s8.hi);
+    row[t] = fmax(fmax(s4.x, s4.y), fmax(s4.z, s4.w));
+  } else {
+    float16 s = ((col[0] + col[1]) + (col[2] + col[3])) + ((col[4] + col[5]) + (col[6] + col[7]));
+    s += ((col[8] + col[9]) + (col[10] + col[11])) + ((col[12] + col[13]) + (col[14] + col[15]));
+    const float8 s8 = s.lo + s.hi;
+    const float4 s4 = s8.lo + s8.hi;
+    row[t] = (s4.x + s4.y) + (s4.z + s4.w);
+  }
+}
 
 __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track_accumulate(
     __global const float4* vertex, __global const float* q, const int width, const int height,
@@ -46,48 +69,59 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
     const int4 dims, __global const short2* voxels, const float voxel_size, const float truncation,
     const float huber_delta, __global const float* prev_cost, __global float* pixel_cost,
     const int compare, __global float* partials) {
-  __local float16 shared16[TRACK_TERMS * TRACK_LOCAL / 16];  // 64-byte aligned
-  __local float* shared = (__local float*)shared16;
+  // Term t of item k: shared[t * TRACK_ITEMS + k], 16 lanes (pixels) each.
+  __local float16 shared[TRACK_TERMS * TRACK_ITEMS];
   const int lid = get_local_id(0) + TRACK_LX * get_local_id(1);
   const int sw = (width + stride - 1) / stride;
   const int sh = (height + stride - 1) / stride;
-  const int su = get_global_id(0);
   const int sv = get_global_id(1);
-  const bool in_grid = su < sw && sv < sh;
-  const int i = in_grid ? sv * stride * width + su * stride : 0;
-  // Scalars only from here on (see emf_sample_sdf_scalar): vector-typed values in the work-item
-  // code keep PoCL's vectoriser off.
-  __global const float* v = (__global const float*)vertex + 4 * i;
-  const float px = v[0], py = v[1], pz = v[2], pw = v[3];
-  const float qu = q[i];
-  const bool input = in_grid && pw > 0.0f && qu > 0.0f;
-  const float x = r0.x * px + r0.y * py + r0.z * pz + r0.w;
-  const float y = r1.x * px + r1.y * py + r1.z * pz + r1.w;
-  const float z = r2.x * px + r2.y * py + r2.z * pz + r2.w;
-  float weight, gx, gy, gz;
-  const float r_raw = emf_sample_sdf_scalar(index, dims.x, dims.y, dims.z, voxels, voxel_size,
-                                            truncation, x, y, z, &weight, &gx, &gy, &gz);
-  const bool valid = input && emf_is_valid(r_raw);
-  // Invalid items continue with harmless numbers and are masked out of every term below.
-  const float r = valid ? r_raw : 0.0f;
-  const float abs_r = fabs(r);
-  const bool inlier = abs_r <= huber_delta;
-  const float c = valid ? qu * weight : 0.0f;
-  const float cost = c * (inlier ? 0.5f * r * r : huber_delta * (abs_r - 0.5f * huber_delta));
-  if (in_grid) pixel_cost[i] = valid ? cost : NAN;
-  const float prev = compare && valid ? prev_cost[i] : NAN;
-  const bool common = emf_is_valid(prev);
-  const float hw = c * (inlier ? 1.0f : huber_delta / abs_r);
-  const float j0 = valid ? gx : 0.0f, j1 = valid ? gy : 0.0f, j2 = valid ? gz : 0.0f;
+  const int16 su = (int16)(get_global_id(0) * 16) +
+                   (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  const int16 in_grid = su < sw & (int16)(sv < sh ? -1 : 0);
+  // Pixel of each lane (0 outside the sampled grid, so that every read stays valid).
+  const int16 pix = in_grid ? sv * stride * width + su * stride : 0;
+  float16 px, py, pz, pw, qu, prev;
+#define TRACK_LOAD(l)                  \
+  {                                    \
+    const float4 p = vertex[pix.s##l]; \
+    px.s##l = p.x;                     \
+    py.s##l = p.y;                     \
+    pz.s##l = p.z;                     \
+    pw.s##l = p.w;                     \
+    qu.s##l = q[pix.s##l];             \
+    prev.s##l = prev_cost[pix.s##l];   \
+  }
+  EMF_LANES16(TRACK_LOAD)
+#undef TRACK_LOAD
+  const int16 input = in_grid & pw > 0.0f & qu > 0.0f;
+  const float16 x = r0.x * px + r0.y * py + r0.z * pz + r0.w;
+  const float16 y = r1.x * px + r1.y * py + r1.z * pz + r1.w;
+  const float16 z = r2.x * px + r2.y * py + r2.z * pz + r2.w;
+  float16 weight, gx, gy, gz;
+  const float16 r_raw = emf_sample_sdf16(index, dims, voxels, voxel_size, truncation, x, y, z,
+                                         &weight, &gx, &gy, &gz);
+  const int16 valid = input & !isnan(r_raw);
+  // Lanes without a valid sample continue with zeros and are masked out of every term.
+  const float16 r = valid ? r_raw : 0.0f;
+  const float16 abs_r = fabs(r);
+  const int16 inlier = abs_r <= huber_delta;
+  const float16 c = valid ? qu * weight : 0.0f;
+  const float16 cost = c * (inlier ? 0.5f * r * r : huber_delta * (abs_r - 0.5f * huber_delta));
+  const float16 own_cost = valid ? cost : NAN;
+#define TRACK_STORE(l) \
+  if (in_grid.s##l) pixel_cost[pix.s##l] = own_cost.s##l;
+  EMF_LANES16(TRACK_STORE)
+#undef TRACK_STORE
+  const int16 common = valid & (int16)(compare ? -1 : 0) & !isnan(prev);
+  const float16 hw = c * (inlier ? 1.0f : huber_delta / abs_r);
+  const float16 j0 = valid ? gx : 0.0f, j1 = valid ? gy : 0.0f, j2 = valid ? gz : 0.0f;
   // x cross grad (x may be NaN where the vertex is invalid).
-  const float j3 = valid ? y * j2 - z * j1 : 0.0f;
-  const float j4 = valid ? z * j0 - x * j2 : 0.0f;
-  const float j5 = valid ? x * j1 - y * j0 : 0.0f;
-  // Every per-item statement below is written out (no loops): see voxel_access.clh on PoCL's
-  // implicit loop barriers.
-  __local float* mine = shared + lid;
-#define TRACK_PUT(k, value) mine[TRACK_LOCAL * (k)] = (value)
-  const float w0 = hw * j0, w1 = hw * j1, w2 = hw * j2, w3 = hw * j3, w4 = hw * j4, w5 = hw * j5;
+  const float16 j3 = valid ? y * j2 - z * j1 : 0.0f;
+  const float16 j4 = valid ? z * j0 - x * j2 : 0.0f;
+  const float16 j5 = valid ? x * j1 - y * j0 : 0.0f;
+  __local float16* mine = shared + lid;
+#define TRACK_PUT(k, value) mine[TRACK_ITEMS * (k)] = (value)
+  const float16 w0 = hw * j0, w1 = hw * j1, w2 = hw * j2, w3 = hw * j3, w4 = hw * j4, w5 = hw * j5;
   TRACK_PUT(0, w0 * j0);
   TRACK_PUT(1, w0 * j1);
   TRACK_PUT(2, w0 * j2);
@@ -117,38 +151,19 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
   TRACK_PUT(26, w5 * r);
   TRACK_PUT(27, cost);
   TRACK_PUT(28, valid ? 1.0f : 0.0f);
-  TRACK_PUT(29, valid && inlier ? 1.0f : 0.0f);
+  TRACK_PUT(29, valid & inlier ? 1.0f : 0.0f);
   TRACK_PUT(30, input ? 1.0f : 0.0f);
   TRACK_PUT(31, valid ? weight : 0.0f);  // TRACK_MAX_TERM
   TRACK_PUT(32, common ? cost - prev : 0.0f);
   TRACK_PUT(33, common ? 1.0f : 0.0f);
 #undef TRACK_PUT
   barrier(CLK_LOCAL_MEM_FENCE);
-  // One work item per term sums its column with explicit 16-wide vector loads (no loops and
-  // no tree of barriers: both keep values of every item alive across barriers on PoCL).
-  if (lid < TRACK_TERMS) {
-    __local const float16* col = (__local const float16*)(shared + TRACK_LOCAL * lid);
-    float16 s;
-    if (lid == TRACK_MAX_TERM) {
-      const float16 m01 = fmax(fmax(col[0], col[1]), fmax(col[2], col[3]));
-      const float16 m23 = fmax(fmax(col[4], col[5]), fmax(col[6], col[7]));
-      const float16 m45 = fmax(fmax(col[8], col[9]), fmax(col[10], col[11]));
-      const float16 m67 = fmax(fmax(col[12], col[13]), fmax(col[14], col[15]));
-      const float16 m = fmax(fmax(m01, m23), fmax(m45, m67));
-      const float8 m8 = fmax(m.lo, m.hi);
-      const float4 m4 = fmax(m8.lo, m8.hi);
-      const float2 m2 = fmax(m4.lo, m4.hi);
-      partials[(get_group_id(0) + get_num_groups(0) * get_group_id(1)) * TRACK_TERMS + lid] =
-          fmax(m2.x, m2.y);
-    } else {
-      s = ((col[0] + col[1]) + (col[2] + col[3])) + ((col[4] + col[5]) + (col[6] + col[7])) +
-          (((col[8] + col[9]) + (col[10] + col[11])) + ((col[12] + col[13]) + (col[14] + col[15])));
-      const float8 s8 = s.lo + s.hi;
-      const float4 s4 = s8.lo + s8.hi;
-      partials[(get_group_id(0) + get_num_groups(0) * get_group_id(1)) * TRACK_TERMS + lid] =
-          (s4.x + s4.y) + (s4.z + s4.w);
-    }
-  }
+  // Work item k adds up terms k, k + 16 and k + 32 (written out, no loops: see above).
+  __global float* row =
+      partials + (get_group_id(0) + get_num_groups(0) * get_group_id(1)) * TRACK_TERMS;
+  track_reduce_term(shared, lid, row);
+  track_reduce_term(shared, lid + TRACK_ITEMS, row);
+  if (lid + 2 * TRACK_ITEMS < TRACK_TERMS) track_reduce_term(shared, lid + 2 * TRACK_ITEMS, row);
 }
 
 // Second stage of the device-side reduction: one work item per term sums the per-group

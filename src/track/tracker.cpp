@@ -14,9 +14,10 @@ namespace {
 
 // Must match kernels_cl/track_reduce.cl.
 constexpr int kTerms = 34;
-// Work-group shape of track_accumulate (one work item per sampled pixel, 2D over the sampled
-// grid): 32 sampled columns x 8 rows.
-constexpr int kLocalX = 32;
+// Work-group shape of track_accumulate (2D over the sampled grid, each work item takes 16
+// consecutive sampled columns of one row): 2 x 8 items = 32 sampled columns x 8 rows.
+constexpr int kLanes = 16;
+constexpr int kLocalX = 2;
 constexpr int kLocalY = 8;
 constexpr int kLocalSize = kLocalX * kLocalY;
 constexpr double kPi = 3.14159265358979323846;
@@ -187,7 +188,8 @@ int Tracker::localSize() { return kLocalSize; }
 int Tracker::numGroups(int stride) const {
   const int sw = (width_ + stride - 1) / stride;
   const int sh = (height_ + stride - 1) / stride;
-  return ((sw + kLocalX - 1) / kLocalX) * ((sh + kLocalY - 1) / kLocalY);
+  const int items_x = (sw + kLanes - 1) / kLanes;
+  return ((items_x + kLocalX - 1) / kLocalX) * ((sh + kLocalY - 1) / kLocalY);
 }
 
 NormalEquations Tracker::evaluate(const map::VolumeDeviceView& volume, cl_mem vertex_map, cl_mem q,
@@ -227,8 +229,10 @@ NormalEquations Tracker::evaluateCandidate(const map::VolumeDeviceView& volume, 
               rows[1], rows[2], volume.index, dims, volume.voxels, volume.voxel_size_m,
               volume.truncation_m, delta, costs_[current_].get(), costs_[1 - current_].get(),
               compare ? 1 : 0, partials_.get());
-  cl::enqueue(ctx_.queue(), accumulate_, static_cast<size_t>((width_ + stride - 1) / stride),
-              static_cast<size_t>((height_ + stride - 1) / stride), 0, kLocalX, kLocalY);
+  const int sw = (width_ + stride - 1) / stride;
+  const int sh = (height_ + stride - 1) / stride;
+  cl::enqueue(ctx_.queue(), accumulate_, static_cast<size_t>((sw + kLanes - 1) / kLanes),
+              static_cast<size_t>(sh), 0, kLocalX, kLocalY);
   double t[kTerms] = {};
   if (options_.final_reduction == "device") {
     cl::setArgs(reduce_, partials_.get(), groups, reduced_.get());
