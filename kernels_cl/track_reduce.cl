@@ -77,7 +77,7 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
   const int sv = get_global_id(1);
   const int16 su = (int16)(get_global_id(0) * 16) +
                    (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  const int16 in_grid = su < sw & (int16)(sv < sh ? -1 : 0);
+  const int16 in_grid = (su < sw) & (int16)(sv < sh ? -1 : 0);
   // Pixel of each lane (0 outside the sampled grid, so that every read stays valid).
   const int16 pix = in_grid ? sv * stride * width + su * stride : 0;
   float16 px, py, pz, pw, qu, prev;
@@ -93,7 +93,7 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
   }
   EMF_LANES16(TRACK_LOAD)
 #undef TRACK_LOAD
-  const int16 input = in_grid & pw > 0.0f & qu > 0.0f;
+  const int16 input = in_grid & (pw > 0.0f) & (qu > 0.0f);
   const float16 x = r0.x * px + r0.y * py + r0.z * pz + r0.w;
   const float16 y = r1.x * px + r1.y * py + r1.z * pz + r1.w;
   const float16 z = r2.x * px + r2.y * py + r2.z * pz + r2.w;
@@ -151,7 +151,7 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
   TRACK_PUT(26, w5 * r);
   TRACK_PUT(27, cost);
   TRACK_PUT(28, valid ? 1.0f : 0.0f);
-  TRACK_PUT(29, valid & inlier ? 1.0f : 0.0f);
+  TRACK_PUT(29, (valid & inlier) ? 1.0f : 0.0f);
   TRACK_PUT(30, input ? 1.0f : 0.0f);
   TRACK_PUT(31, valid ? weight : 0.0f);  // TRACK_MAX_TERM
   TRACK_PUT(32, common ? cost - prev : 0.0f);

@@ -83,7 +83,8 @@ __kernel __attribute__((reqd_work_group_size(EMF_INTEGRATE_ITEMS, 1, 1))) void i
   const float16 inv_z = 1.0f / zc;
   const float16 u = fx * (xc * inv_z) + cx + 0.5f;
   const float16 v = fy * (yc * inv_z) + cy + 0.5f;
-  const int16 in_view = zc > 0.0f & u >= 0.0f & v >= 0.0f & u < (float)width & v < (float)height;
+  const int16 in_view =
+      (zc > 0.0f) & (u >= 0.0f) & (v >= 0.0f) & (u < (float)width) & (v < (float)height);
   // Lanes out of view read pixel 0 (converted from 0, never from NaN or out-of-range values).
   const int16 pixel = convert_int16(in_view ? v : 0.0f) * width + convert_int16(in_view ? u : 0.0f);
   float16 d_meas, q;
@@ -94,7 +95,7 @@ __kernel __attribute__((reqd_work_group_size(EMF_INTEGRATE_ITEMS, 1, 1))) void i
 #undef EMF_INTEGRATE_READ
   const float16 sdf = d_meas - zc;
   // NaN depth fails every comparison.
-  const int16 observed = in_view & d_meas > 0.0f & sdf >= -truncation;
+  const int16 observed = in_view & (d_meas > 0.0f) & (sdf >= -truncation);
   const int16 free_space = sdf > truncation;
   const float16 w = (free_space & (int16)(free_space_full_weight ? -1 : 0)) ? 1.0f : q;
   __global int* words = (__global int*)voxels + slot * EMF_BLOCK_VOXELS + get_local_id(0) * 16;
@@ -108,7 +109,7 @@ __kernel __attribute__((reqd_work_group_size(EMF_INTEGRATE_ITEMS, 1, 1))) void i
   tsdf_new = tsdf_new < -1.0f ? -1.0f : (tsdf_new > 1.0f ? 1.0f : tsdf_new);
   float16 w_new = w_sum < max_weight ? w_sum : max_weight;
   w_new = w_new < 32767.0f / EMF_WEIGHT_SCALE ? w_new : 32767.0f / EMF_WEIGHT_SCALE;
-  const int16 update = observed & w > 0.0f;
+  const int16 update = observed & (w > 0.0f);
   // Converted only where updated (elsewhere tsdf_new may be NaN: 0 / 0).
   const int16 new_t = convert_int16(emf_round_even16(update ? tsdf_new * EMF_TSDF_SCALE : 0.0f));
   const int16 new_w = convert_int16(emf_round_even16(update ? w_new * EMF_WEIGHT_SCALE : 0.0f));

@@ -175,7 +175,9 @@ AllocationReport Volume::allocate(const IntegrationInput& frame) {
               row4(T_volume_camera, 1), row4(T_volume_camera, 2),
               static_cast<cl_float>(static_cast<float>(kBlockSize) * spec_.voxel_size_m),
               static_cast<cl_float>(spec_.truncation_m), dims, needed_);
-  cl::enqueue(ctx_.queue(), mark_, static_cast<size_t>(w), static_cast<size_t>(h), 0, 16, 16);
+  // 16 pixels of a row per work item.
+  cl::enqueue(ctx_.queue(), mark_, static_cast<size_t>((w + 15) / 16), static_cast<size_t>(h), 0, 4,
+              16);
 
   const cl_int block_count = spec_.blockCount();
   cl::setArgs(assign_, needed_, index_, countIndex(), static_cast<cl_int>(spec_.has_counts),
