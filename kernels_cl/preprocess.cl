@@ -25,7 +25,9 @@ inline bool emf_depth_in_range(float d, float min_depth, float max_depth) {
 // The window radius is a build option (-DPRE_RADIUS=r, one cached program per radius).
 // Invalid or out-of-image neighbours are masked out of the sums. Global size:
 // (ceil(width / 16), height).
-inline float16 emf_load16(__global const float* row, int u, int width) {
+// The helpers are always inlined: a call in the tap loop makes every live vector spill.
+__attribute__((always_inline)) inline float16 emf_load16(__global const float* row, int u,
+                                                         int width) {
   if (u >= 0 && u + 15 < width) return vload16(0, row + u);
   float16 r;
 #define EMF_PRE_LOAD(l) r.s##l = row[clamp(u + 0x##l, 0, width - 1)];
@@ -34,7 +36,8 @@ inline float16 emf_load16(__global const float* row, int u, int width) {
   return r;
 }
 
-inline int16 emf_in_range16(float16 d, float min_depth, float max_depth) {
+__attribute__((always_inline)) inline int16 emf_in_range16(float16 d, float min_depth,
+                                                           float max_depth) {
   // The comparisons are false for NaN.
   return (d > 0.0f) & (d >= min_depth) & (d <= max_depth);
 }
@@ -42,9 +45,10 @@ inline int16 emf_in_range16(float16 d, float min_depth, float max_depth) {
 /// exp(x) for x <= 0 (the bilateral weights): 2^(x log2 e) split into 2^n (exponent bits) and
 /// 2^f, |f| <= 1/2, by a degree-7 polynomial (relative error below 3e-7, a few float ulps of
 /// the libm exp the CPU reference uses). Arguments below -87 give 0 instead of a subnormal.
-inline float16 emf_exp_neg16(float16 x) {
+__attribute__((always_inline)) inline float16 emf_exp_neg16(float16 x) {
   const float16 y = fmax(x * 1.44269504f, -126.0f);
-  const float16 n = rint(y);
+  // Round to nearest (even) by adding and subtracting 1.5 * 2^23 (|y| <= 126).
+  const float16 n = (y + 12582912.0f) - 12582912.0f;
   const float16 f = y - n;
   // 2^f = e^(f ln 2), Taylor coefficients of e^t at t = f ln 2 folded into powers of f.
   float16 p = 1.5252734e-5f;
