@@ -226,15 +226,15 @@ void kernels(emf::cl::Context& ctx, const std::string& data, int repeats) {
     *cpu = median(c);
   };
   std::printf("\nkernels (median of %d runs; wall ms / process CPU ms)\n", repeats);
-  std::printf("  %-9s %15s %15s %15s %15s %7s\n", "size", "preprocess", "eval:host-sum",
-              "eval:device-sum", "eval:stride2", "groups");
+  std::printf("  %-9s %15s %15s %15s %15s %15s %7s\n", "size", "preprocess", "eval:host-sum",
+              "eval:device-sum", "eval:stride2", "eval:stride8", "groups");
   for (int width : {640, 320}) {
     emf::io::Intrinsics k = emf::test::smallCamera().scaled(width, width * 3 / 4);
     const cv::Mat depth = scene.render(k, emf::test::roomCornerCamera());
     emf::track::Preprocessor pre(ctx, emf::track::PreprocessOptions{}, k);
     cv::Mat real_scaled;
     cv::resize(real, real_scaled, cv::Size(k.width, k.height), 0, 0, cv::INTER_NEAREST);
-    double w[4], c[4];
+    double w[5], c[5];
     timeIt(
         [&] {
           pre.process(real_scaled);
@@ -243,10 +243,12 @@ void kernels(emf::cl::Context& ctx, const std::string& data, int repeats) {
         &w[0], &c[0]);
     pre.process(depth);
     int groups = 0;
-    for (int mode = 0; mode < 3; ++mode) {
+    // Modes: host sum, device sum, stride 2, stride 8 (few pixels: mostly the fixed cost of one
+    // evaluation, i.e. launch, partial read-back and host sum).
+    for (int mode = 0; mode < 4; ++mode) {
       TrackOptions o;
       o.final_reduction = mode == 1 ? "device" : "host";
-      const int stride = mode == 2 ? 2 : 1;
+      const int stride = mode == 2 ? 2 : (mode == 3 ? 8 : 1);
       emf::track::Tracker tracker(ctx, o, k.width, k.height);
       groups = tracker.numGroups(1);
       timeIt(
@@ -271,13 +273,15 @@ void kernels(emf::cl::Context& ctx, const std::string& data, int repeats) {
           &aw, &ac);
       std::printf("  CPU reference (1 thread): preprocess %.2f ms, accumulate %.2f ms\n", rc, ac);
     }
-    std::printf("  %4dx%-4d %7.2f/%7.2f %7.2f/%7.2f %7.2f/%7.2f %7.2f/%7.2f %7d\n", k.width,
-                k.height, w[0], c[0], w[1], c[1], w[2], c[2], w[3], c[3], groups);
+    std::printf("  %4dx%-4d %7.2f/%7.2f %7.2f/%7.2f %7.2f/%7.2f %7.2f/%7.2f %7.2f/%7.2f %7d\n",
+                k.width, k.height, w[0], c[0], w[1], c[1], w[2], c[2], w[3], c[3], w[4], c[4],
+                groups);
     std::printf(
         "track_bench kernels=%dx%d preprocess_ms=%.2f preprocess_cpu_ms=%.2f "
         "eval_host_ms=%.2f eval_host_cpu_ms=%.2f eval_device_ms=%.2f "
-        "eval_device_cpu_ms=%.2f eval_stride2_ms=%.2f eval_stride2_cpu_ms=%.2f\n",
-        k.width, k.height, w[0], c[0], w[1], c[1], w[2], c[2], w[3], c[3]);
+        "eval_device_cpu_ms=%.2f eval_stride2_ms=%.2f eval_stride2_cpu_ms=%.2f "
+        "eval_stride8_ms=%.2f eval_stride8_cpu_ms=%.2f\n",
+        k.width, k.height, w[0], c[0], w[1], c[1], w[2], c[2], w[3], c[3], w[4], c[4]);
   }
 }
 

@@ -1,7 +1,8 @@
 // Block allocation in the voxel-block pool (ARCHITECTURE.md "Memory: one fixed pool").
 //
 // Per frame and volume:
-//   mark_blocks          one work-item per pixel: marks every block that the pixel's ray crosses
+//   mark_blocks          per pixel (16 per work item): marks every block that the pixel's ray
+//   crosses
 //                        within +-truncation of the measured depth (3-D DDA over blocks; plain
 //                        stores of 1, no atomics).
 //   assign_blocks        one work-item per grid block: a marked block without a slot takes one
@@ -34,61 +35,77 @@
 // Depths beyond this (metres) are ignored: keeps block coordinates far inside int range.
 #define EMF_MAX_MARK_DEPTH 1000.0f
 
+// mark_blocks runs 16 pixels of a row per work item, in the lanes of 16-wide vectors (PoCL
+// keeps the one-pixel-per-item form scalar); the DDA steps all lanes together until the last
+// one is done. Per lane the operations and the cell sequence are those of one pixel:
+//   segment [max(d - truncation, 0), d + truncation] along the pixel's ray (z-depth), in block
+//   units; visit the blocks it crosses (3-D DDA), marking those inside the grid.
+// Launch ceil(width / 16) x height work items.
 __kernel void mark_blocks(__global const float* depth, const int width, const int height,
                           const float fx, const float fy, const float cx, const float cy,
                           const float4 r0, const float4 r1, const float4 r2, const float block_size,
                           const float truncation, const int4 dims, __global uchar* needed) {
-  const int x = get_global_id(0);
+  const int x0 = get_global_id(0) * 16;
   const int y = get_global_id(1);
-  if (x >= width || y >= height) return;
-  const float d = depth[y * width + x];
-  if (!emf_is_valid(d) || d <= 0.0f || d > EMF_MAX_MARK_DEPTH) return;
-  const float3 ray = emf_pixel_ray(x, y, fx, fy, cx, cy);
-  const float z0 = fmax(d - truncation, 0.0f);
-  const float z1 = d + truncation;
-  // Segment ends in block units of the volume frame.
-  const float3 a = emf_transform(r0, r1, r2, ray * z0) / block_size;
-  const float3 b = emf_transform(r0, r1, r2, ray * z1) / block_size;
-  const float3 dir = b - a;
-  int4 cell = (int4)((int)floor(a.x), (int)floor(a.y), (int)floor(a.z), 0);
-  const int4 end = (int4)((int)floor(b.x), (int)floor(b.y), (int)floor(b.z), 0);
-  const int4 step =
-      (int4)(dir.x > 0.0f ? 1 : (dir.x < 0.0f ? -1 : 0), dir.y > 0.0f ? 1 : (dir.y < 0.0f ? -1 : 0),
-             dir.z > 0.0f ? 1 : (dir.z < 0.0f ? -1 : 0), 0);
-  // Ray parameter (0..1 along the segment) of the next block face per axis, and per block.
-  float3 t_max = (float3)(INFINITY, INFINITY, INFINITY);
-  float3 t_delta = (float3)(INFINITY, INFINITY, INFINITY);
-  if (step.x != 0) {
-    t_max.x = ((float)(cell.x + (step.x > 0 ? 1 : 0)) - a.x) / dir.x;
-    t_delta.x = (float)step.x / dir.x;
-  }
-  if (step.y != 0) {
-    t_max.y = ((float)(cell.y + (step.y > 0 ? 1 : 0)) - a.y) / dir.y;
-    t_delta.y = (float)step.y / dir.y;
-  }
-  if (step.z != 0) {
-    t_max.z = ((float)(cell.z + (step.z > 0 ? 1 : 0)) - a.z) / dir.z;
-    t_delta.z = (float)step.z / dir.z;
-  }
-  const int max_cells = abs(end.x - cell.x) + abs(end.y - cell.y) + abs(end.z - cell.z) + 1;
-  for (int n = 0; n < max_cells; ++n) {
-    if (cell.x >= 0 && cell.y >= 0 && cell.z >= 0 && cell.x < dims.x && cell.y < dims.y &&
-        cell.z < dims.z) {
-      needed[emf_block_linear(dims, cell)] = 1;
-    }
-    if (t_max.x <= t_max.y && t_max.x <= t_max.z) {
-      if (t_max.x > 1.0f) break;
-      cell.x += step.x;
-      t_max.x += t_delta.x;
-    } else if (t_max.y <= t_max.z) {
-      if (t_max.y > 1.0f) break;
-      cell.y += step.y;
-      t_max.y += t_delta.y;
-    } else {
-      if (t_max.z > 1.0f) break;
-      cell.z += step.z;
-      t_max.z += t_delta.z;
-    }
+  if (x0 >= width || y >= height) return;
+  const int16 xs = (int16)(x0) + (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  const int16 in_row = xs < width;
+  const int16 xr = in_row ? xs : x0;  // lanes past the row end read their row's first pixel
+  float16 d;
+#define EMF_MARK_READ(l) d.s##l = depth[y * width + xr.s##l];
+  EMF_LANES16(EMF_MARK_READ)
+#undef EMF_MARK_READ
+  int16 alive = in_row & !isnan(d) & (d > 0.0f) & (d <= EMF_MAX_MARK_DEPTH);
+  if (!any(alive)) return;
+  // emf_pixel_ray, emf_transform and the DDA set-up of the scalar form, per lane.
+  const float16 rx = (convert_float16(xs) - cx) / fx;
+  const float ry = ((float)y - cy) / fy;
+  const float16 z0 = alive ? fmax(d - truncation, 0.0f) : 0.0f;
+  const float16 z1 = alive ? d + truncation : 0.0f;
+  const float16 ax0 = rx * z0, ay0 = ry * z0, az0 = 1.0f * z0;
+  const float16 ax1 = rx * z1, ay1 = ry * z1, az1 = 1.0f * z1;
+  const float16 ax = (r0.x * ax0 + r0.y * ay0 + r0.z * az0 + r0.w) / block_size;
+  const float16 ay = (r1.x * ax0 + r1.y * ay0 + r1.z * az0 + r1.w) / block_size;
+  const float16 az = (r2.x * ax0 + r2.y * ay0 + r2.z * az0 + r2.w) / block_size;
+  const float16 bx = (r0.x * ax1 + r0.y * ay1 + r0.z * az1 + r0.w) / block_size;
+  const float16 by = (r1.x * ax1 + r1.y * ay1 + r1.z * az1 + r1.w) / block_size;
+  const float16 bz = (r2.x * ax1 + r2.y * ay1 + r2.z * az1 + r2.w) / block_size;
+  const float16 dx = bx - ax, dy = by - ay, dz = bz - az;
+  int16 cx_b = convert_int16(floor(ax)), cy_b = convert_int16(floor(ay));
+  int16 cz_b = convert_int16(floor(az));
+  const int16 ex = convert_int16(floor(bx)), ey = convert_int16(floor(by));
+  const int16 ez = convert_int16(floor(bz));
+  const int16 sx = dx > 0.0f ? 1 : (dx < 0.0f ? -1 : 0);
+  const int16 sy = dy > 0.0f ? 1 : (dy < 0.0f ? -1 : 0);
+  const int16 sz = dz > 0.0f ? 1 : (dz < 0.0f ? -1 : 0);
+  float16 tx = sx != 0 ? (convert_float16(cx_b + (sx > 0 ? 1 : 0)) - ax) / dx : INFINITY;
+  float16 ty = sy != 0 ? (convert_float16(cy_b + (sy > 0 ? 1 : 0)) - ay) / dy : INFINITY;
+  float16 tz = sz != 0 ? (convert_float16(cz_b + (sz > 0 ? 1 : 0)) - az) / dz : INFINITY;
+  const float16 tdx = sx != 0 ? convert_float16(sx) / dx : INFINITY;
+  const float16 tdy = sy != 0 ? convert_float16(sy) / dy : INFINITY;
+  const float16 tdz = sz != 0 ? convert_float16(sz) / dz : INFINITY;
+  const int16 max_cells = convert_int16(abs(ex - cx_b) + abs(ey - cy_b) + abs(ez - cz_b)) + 1;
+  for (int n = 0; any(alive); ++n) {
+    alive &= (int16)(n) < max_cells;
+    const int16 mark = alive & (cx_b >= 0) & (cy_b >= 0) & (cz_b >= 0) & (cx_b < dims.x) &
+                       (cy_b < dims.y) & (cz_b < dims.z);
+    const int16 lin = cx_b + dims.x * (cy_b + dims.y * cz_b);
+#define EMF_MARK_STORE(l) \
+  if (mark.s##l) needed[lin.s##l] = 1;
+    EMF_LANES16(EMF_MARK_STORE)
+#undef EMF_MARK_STORE
+    // Axis of the nearest block face (ties: x before y before z), as in the scalar form.
+    const int16 kx = (tx <= ty) & (tx <= tz);
+    const int16 ky = !kx & (ty <= tz);
+    const int16 kz = !kx & !ky;
+    const float16 t_near = kx ? tx : (ky ? ty : tz);
+    alive &= !(t_near > 1.0f);
+    cx_b += (alive & kx) ? sx : 0;
+    cy_b += (alive & ky) ? sy : 0;
+    cz_b += (alive & kz) ? sz : 0;
+    tx = (alive & kx) ? tx + tdx : tx;
+    ty = (alive & ky) ? ty + tdy : ty;
+    tz = (alive & kz) ? tz + tdz : tz;
   }
 }
 

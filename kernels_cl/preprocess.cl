@@ -12,32 +12,55 @@ inline bool emf_depth_in_range(float d, float min_depth, float max_depth) {
   return emf_is_valid(d) && d > 0.0f && d >= min_depth && d <= max_depth;
 }
 
+/// Expands F(lane) for the 16 lanes (component suffixes .s0 ... .sf).
+#define EMF_PRE_LANES16(F) \
+  F(0) F(1) F(2) F(3) F(4) F(5) F(6) F(7) F(8) F(9) F(a) F(b) F(c) F(d) F(e) F(f)
+
 #ifndef PRE_RADIUS
 #define PRE_RADIUS 3
 #endif
 
-// Eight horizontally adjacent pixels per work item (float8 arithmetic, so CPU devices such as
-// PoCL, which do not vectorise across work items here, use SIMD; GPUs see 8 independent
-// lanes). The window radius is a build option (-DPRE_RADIUS=r, one cached program per radius).
-// Invalid or out-of-image neighbours are masked out of the sums. Global size: (ceil(width / 8),
-// height).
-inline float8 emf_load8(__global const float* row, int u, int width) {
-  if (u >= 0 && u + 7 < width) return vload8(0, row + u);
-  float8 r;
-  r.s0 = row[clamp(u + 0, 0, width - 1)];
-  r.s1 = row[clamp(u + 1, 0, width - 1)];
-  r.s2 = row[clamp(u + 2, 0, width - 1)];
-  r.s3 = row[clamp(u + 3, 0, width - 1)];
-  r.s4 = row[clamp(u + 4, 0, width - 1)];
-  r.s5 = row[clamp(u + 5, 0, width - 1)];
-  r.s6 = row[clamp(u + 6, 0, width - 1)];
-  r.s7 = row[clamp(u + 7, 0, width - 1)];
+// Sixteen horizontally adjacent pixels per work item (float16 arithmetic: PoCL does not
+// vectorise across work items here, so the SIMD is explicit; GPUs see 16 independent lanes).
+// The window radius is a build option (-DPRE_RADIUS=r, one cached program per radius).
+// Invalid or out-of-image neighbours are masked out of the sums. Global size:
+// (ceil(width / 16), height).
+// The helpers are always inlined: a call in the tap loop makes every live vector spill.
+__attribute__((always_inline)) inline float16 emf_load16(__global const float* row, int u,
+                                                         int width) {
+  if (u >= 0 && u + 15 < width) return vload16(0, row + u);
+  float16 r;
+#define EMF_PRE_LOAD(l) r.s##l = row[clamp(u + 0x##l, 0, width - 1)];
+  EMF_PRE_LANES16(EMF_PRE_LOAD)
+#undef EMF_PRE_LOAD
   return r;
 }
 
-inline int8 emf_in_range8(float8 d, float min_depth, float max_depth) {
-  // isnan(d) is false for valid depths; the comparisons are false for NaN anyway.
-  return d > 0.0f && d >= min_depth && d <= max_depth;
+__attribute__((always_inline)) inline int16 emf_in_range16(float16 d, float min_depth,
+                                                           float max_depth) {
+  // The comparisons are false for NaN.
+  return (d > 0.0f) & (d >= min_depth) & (d <= max_depth);
+}
+
+/// exp(x) for x <= 0 (the bilateral weights): 2^(x log2 e) split into 2^n (exponent bits) and
+/// 2^f, |f| <= 1/2, by a degree-7 polynomial (relative error below 3e-7, a few float ulps of
+/// the libm exp the CPU reference uses). Arguments below -87 give 0 instead of a subnormal.
+__attribute__((always_inline)) inline float16 emf_exp_neg16(float16 x) {
+  const float16 y = fmax(x * 1.44269504f, -126.0f);
+  // Round to nearest (even) by adding and subtracting 1.5 * 2^23 (|y| <= 126).
+  const float16 n = (y + 12582912.0f) - 12582912.0f;
+  const float16 f = y - n;
+  // 2^f = e^(f ln 2), Taylor coefficients of e^t at t = f ln 2 folded into powers of f.
+  float16 p = 1.5252734e-5f;
+  p = p * f + 1.5403530e-4f;
+  p = p * f + 1.3333558e-3f;
+  p = p * f + 9.6181291e-3f;
+  p = p * f + 5.5504109e-2f;
+  p = p * f + 2.4022651e-1f;
+  p = p * f + 6.9314718e-1f;
+  p = p * f + 1.0f;
+  const float16 scale = as_float16((convert_int16(n) + 127) << 23);
+  return y > -126.0f ? p * scale : 0.0f;
 }
 
 __kernel void preprocess_depth(__global const float* depth_in, __global float* depth_out,
@@ -46,47 +69,41 @@ __kernel void preprocess_depth(__global const float* depth_in, __global float* d
                                const float inv_two_sigma_depth_sq, const float min_depth,
                                const float max_depth, const float fx, const float fy,
                                const float cx, const float cy) {
-  const int u0 = get_global_id(0) * 8;
+  const int u0 = get_global_id(0) * 16;
   const int v = get_global_id(1);
   if (u0 >= width || v >= height) return;
-  const int8 lane = (int8)(0, 1, 2, 3, 4, 5, 6, 7);
-  const float8 d0 = emf_load8(depth_in + v * width, u0, width);
-  const int8 centre_valid = emf_in_range8(d0, min_depth, max_depth);
-  float8 sum_w = 0.0f;
-  float8 sum_wd = 0.0f;
+  const int16 lane = (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  const float16 d0 = emf_load16(depth_in + v * width, u0, width);
+  const int16 centre_valid = emf_in_range16(d0, min_depth, max_depth);
+  float16 sum_w = 0.0f;
+  float16 sum_wd = 0.0f;
   for (int dv = -PRE_RADIUS; dv <= PRE_RADIUS; ++dv) {
     const int vv = v + dv;
     if (vv < 0 || vv >= height) continue;
     __global const float* row = depth_in + vv * width;
     for (int du = -PRE_RADIUS; du <= PRE_RADIUS; ++du) {
-      const float8 d = emf_load8(row, u0 + du, width);
-      const int8 uu = u0 + du + lane;
-      const int8 use = emf_in_range8(d, min_depth, max_depth) & (uu >= 0) & (uu < width);
-      const float8 dd = d - d0;
-      const float8 w = exp(-(float)(du * du + dv * dv) * inv_two_sigma_space_sq -
-                           dd * dd * inv_two_sigma_depth_sq);
-      sum_w += select((float8)0.0f, w, use);
-      sum_wd += select((float8)0.0f, w * d, use);
+      const float16 d = emf_load16(row, u0 + du, width);
+      const int16 uu = u0 + du + lane;
+      const int16 use = emf_in_range16(d, min_depth, max_depth) & (uu >= 0) & (uu < width);
+      const float16 dd = d - d0;
+      const float16 w = emf_exp_neg16(-(float)(du * du + dv * dv) * inv_two_sigma_space_sq -
+                                      dd * dd * inv_two_sigma_depth_sq);
+      sum_w += use ? w : 0.0f;
+      sum_wd += use ? w * d : 0.0f;
     }
   }
   // The centre always contributes weight 1 when valid, so sum_w >= 1 there.
-  const float8 z = select((float8)NAN, sum_wd / sum_w, centre_valid);
-  const float8 x = (convert_float8(u0 + lane) - cx) / fx * z;
+  const float16 z = centre_valid ? sum_wd / sum_w : NAN;
+  const float16 x = (convert_float16(u0 + lane) - cx) / fx * z;
   const float y = ((float)v - cy) / fy;
-  const float zs[8] = {z.s0, z.s1, z.s2, z.s3, z.s4, z.s5, z.s6, z.s7};
-  const float xs[8] = {x.s0, x.s1, x.s2, x.s3, x.s4, x.s5, x.s6, x.s7};
   const int i0 = v * width + u0;
-  if (u0 + 7 < width) {
-    vstore8(z, 0, depth_out + i0);
-    for (int l = 0; l < 8; ++l) {
-      vertex[i0 + l] =
-          isnan(zs[l]) ? (float4)(NAN, NAN, NAN, 0.0f) : (float4)(xs[l], y * zs[l], zs[l], 1.0f);
-    }
-  } else {
-    for (int l = 0; l < 8 && u0 + l < width; ++l) {
-      depth_out[i0 + l] = zs[l];
-      vertex[i0 + l] =
-          isnan(zs[l]) ? (float4)(NAN, NAN, NAN, 0.0f) : (float4)(xs[l], y * zs[l], zs[l], 1.0f);
-    }
+  if (u0 + 15 < width) vstore16(z, 0, depth_out + i0);
+#define EMF_PRE_STORE(l)                                                             \
+  if (u0 + 0x##l < width) {                                                          \
+    if (u0 + 15 >= width) depth_out[i0 + 0x##l] = z.s##l;                            \
+    vertex[i0 + 0x##l] = isnan(z.s##l) ? (float4)(NAN, NAN, NAN, 0.0f)               \
+                                       : (float4)(x.s##l, y * z.s##l, z.s##l, 1.0f); \
   }
+  EMF_PRE_LANES16(EMF_PRE_STORE)
+#undef EMF_PRE_STORE
 }

@@ -27,3 +27,38 @@ __kernel void sample_sdf_points(__global const int* index, __global const int* c
   gradient_out[i] = emf_is_valid(psi) ? (float4)(gradient, 0.0f) : (float4)(NAN, NAN, NAN, 0.0f);
   pfg_out[i] = has_counts ? emf_sample_pfg(count_index, dims, voxels, voxel_size, p) : 1.0f;
 }
+
+// The same through emf_sample_sdf16 (16 points per work item, explicit SIMD; what
+// track_accumulate uses): psi, weight and gradient as above, p_fg not sampled. Launch
+// ceil(count / 16) work items.
+__kernel void sample_sdf_points16(__global const int* index, const int4 dims,
+                                  __global const short2* voxels, const float voxel_size,
+                                  const float truncation, __global const float4* points,
+                                  const int count, __global float* psi_out,
+                                  __global float* weight_out, __global float4* gradient_out) {
+  const int i0 = get_global_id(0) * 16;
+  if (i0 >= count) return;
+  float16 px, py, pz;
+#define SDF16_LOAD(l)                                    \
+  {                                                      \
+    const float4 p = points[min(i0 + 0x##l, count - 1)]; \
+    px.s##l = p.x;                                       \
+    py.s##l = p.y;                                       \
+    pz.s##l = p.z;                                       \
+  }
+  EMF_LANES16(SDF16_LOAD)
+#undef SDF16_LOAD
+  float16 weight, gx, gy, gz;
+  const float16 psi = emf_sample_sdf16(index, dims, voxels, voxel_size, truncation, px, py, pz,
+                                       &weight, &gx, &gy, &gz);
+#define SDF16_STORE(l)                                                                  \
+  if (i0 + 0x##l < count) {                                                             \
+    const bool ok = emf_is_valid(psi.s##l);                                             \
+    psi_out[i0 + 0x##l] = psi.s##l;                                                     \
+    weight_out[i0 + 0x##l] = ok ? weight.s##l : 0.0f;                                   \
+    gradient_out[i0 + 0x##l] =                                                          \
+        ok ? (float4)(gx.s##l, gy.s##l, gz.s##l, 0.0f) : (float4)(NAN, NAN, NAN, 0.0f); \
+  }
+  EMF_LANES16(SDF16_STORE)
+#undef SDF16_STORE
+}

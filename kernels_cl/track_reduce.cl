@@ -8,8 +8,11 @@
 // in it), Huber weight h = min(1, delta / |r|), rho = Huber cost. Jacobian w.r.t. a
 // left-multiplied increment (v, w), translation first: J = (grad, x cross grad), x = T p.
 //
-// One work item accumulates chunks of 8 consecutive samples privately (chunks strided by the
-// global size); the work-group then sums its items in local memory and writes one row of
+// One work item per sampled pixel, on a 2D range over the sampled grid (sampled column, row):
+// no loops and no early exits, so that PoCL's work-group vectoriser runs many work items at
+// once (a per-item pixel loop or branches around the sampling keep it scalar). Items outside
+// the grid or without a valid sample contribute zeros. The work-group then reduces its items'
+// terms in local memory (a tree, TRACK_TERMS values per item and level) and writes one row of
 // TRACK_TERMS partials:
 //   [0, 21)  upper triangle of H = sum c h J J^T (row-major: 00 01 .. 05 11 12 .. 55)
 //   [21, 27) g = sum c h J r
@@ -26,108 +29,141 @@
 
 #define TRACK_TERMS 34
 #define TRACK_MAX_TERM 31
-#ifndef TRACK_LOCAL
-#define TRACK_LOCAL 64
+// Work-group shape in work items; each item handles 16 consecutive sampled columns of a row.
+#ifndef TRACK_LX
+#define TRACK_LX 2
+#endif
+#ifndef TRACK_LY
+#define TRACK_LY 8
+#endif
+#define TRACK_ITEMS (TRACK_LX * TRACK_LY)
+#if TRACK_ITEMS != 16
+#error "track_accumulate's final reduction is written for 16 work items per group"
 #endif
 
-__kernel __attribute__((reqd_work_group_size(TRACK_LOCAL, 1, 1))) void track_accumulate(
+// Sum (max for TRACK_MAX_TERM) of term t over the 16 items' vectors of a group, then over
+// the 16 lanes, written to row[t].
+__attribute__((always_inline)) inline void track_reduce_term(__local const float16* shared, int t,
+                                                             __global float* row) {
+  __local const float16* col = shared + TRACK_ITEMS * t;
+  if (t == TRACK_MAX_TERM) {
+    float16 s = fmax(fmax(fmax(col[0], col[1]), fmax(col[2], col[3])),
+                     fmax(fmax(col[4], col[5]), fmax(col[6], col[7])));
+    s = fmax(s, fmax(fmax(fmax(col[8], col[9]), fmax(col[10], col[11])),
+                     fmax(fmax(col[12], col[13]), fmax(col[14], col[15]))));
+    const float8 s8 = fmax(s.lo, s.hi);
+    const float4 s4 = fmax(s8.lo, s8.hi);
+    row[t] = fmax(fmax(s4.x, s4.y), fmax(s4.z, s4.w));
+  } else {
+    float16 s = ((col[0] + col[1]) + (col[2] + col[3])) + ((col[4] + col[5]) + (col[6] + col[7]));
+    s += ((col[8] + col[9]) + (col[10] + col[11])) + ((col[12] + col[13]) + (col[14] + col[15]));
+    const float8 s8 = s.lo + s.hi;
+    const float4 s4 = s8.lo + s8.hi;
+    row[t] = (s4.x + s4.y) + (s4.z + s4.w);
+  }
+}
+
+__kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track_accumulate(
     __global const float4* vertex, __global const float* q, const int width, const int height,
     const int stride, const float4 r0, const float4 r1, const float4 r2, __global const int* index,
     const int4 dims, __global const short2* voxels, const float voxel_size, const float truncation,
     const float huber_delta, __global const float* prev_cost, __global float* pixel_cost,
     const int compare, __global float* partials) {
-  __local float shared[TRACK_TERMS * TRACK_LOCAL];
-  const int lid = get_local_id(0);
+  // Term t of item k: shared[t * TRACK_ITEMS + k], 16 lanes (pixels) each.
+  __local float16 shared[TRACK_TERMS * TRACK_ITEMS];
+  const int lid = get_local_id(0) + TRACK_LX * get_local_id(1);
   const int sw = (width + stride - 1) / stride;
   const int sh = (height + stride - 1) / stride;
-  const int n = sw * sh;
-  // The 27 Gauss-Newton terms are accumulated for 8 samples at once (float8), the sampling
-  // itself is scalar; the other terms are cheap scalars.
-  float8 hg[27];
-  for (int k = 0; k < 27; ++k) hg[k] = 0.0f;
-  float cost_sum = 0.0f, valid = 0.0f, inliers = 0.0f, input = 0.0f, max_w = 0.0f;
-  float cost_change = 0.0f, common = 0.0f;
-  for (int s0 = get_global_id(0) * 8; s0 < n; s0 += get_global_size(0) * 8) {
-    float lw[8], lr[8], lj[6][8];
-    for (int l = 0; l < 8; ++l) {
-      lw[l] = 0.0f;
-      lr[l] = 0.0f;
-      for (int a = 0; a < 6; ++a) lj[a][l] = 0.0f;
-      const int s = s0 + l;
-      if (s >= n) continue;
-      const int i = (s / sw) * stride * width + (s % sw) * stride;
-      const float4 p = vertex[i];
-      const float qu = q[i];
-      pixel_cost[i] = NAN;
-      if (!(p.w > 0.0f) || !(qu > 0.0f)) continue;
-      input += 1.0f;
-      const float3 x =
-          (float3)(dot(r0.xyz, p.xyz) + r0.w, dot(r1.xyz, p.xyz) + r1.w, dot(r2.xyz, p.xyz) + r2.w);
-      float weight;
-      float3 grad;
-      const float r =
-          emf_sample_sdf(index, dims, voxels, voxel_size, truncation, x, &weight, &grad);
-      if (!emf_is_valid(r)) continue;
-      valid += 1.0f;
-      const float abs_r = fabs(r);
-      const bool inlier = abs_r <= huber_delta;
-      const float c = qu * weight;
-      inliers += inlier ? 1.0f : 0.0f;
-      const float cost = c * (inlier ? 0.5f * r * r : huber_delta * (abs_r - 0.5f * huber_delta));
-      cost_sum += cost;
-      pixel_cost[i] = cost;
-      if (compare) {
-        const float prev = prev_cost[i];
-        if (emf_is_valid(prev)) {
-          cost_change += cost - prev;
-          common += 1.0f;
-        }
-      }
-      max_w = fmax(max_w, weight);
-      const float3 jr = cross(x, grad);
-      lw[l] = c * (inlier ? 1.0f : huber_delta / abs_r);
-      lr[l] = r;
-      lj[0][l] = grad.x;
-      lj[1][l] = grad.y;
-      lj[2][l] = grad.z;
-      lj[3][l] = jr.x;
-      lj[4][l] = jr.y;
-      lj[5][l] = jr.z;
-    }
-    const float8 w8 = vload8(0, lw);
-    const float8 r8 = vload8(0, lr);
-    float8 j8[6];
-    for (int a = 0; a < 6; ++a) j8[a] = vload8(0, lj[a]);
-    int k = 0;
-    for (int a = 0; a < 6; ++a) {
-      const float8 wa = w8 * j8[a];
-      for (int b = a; b < 6; ++b) hg[k++] += wa * j8[b];
-    }
-    for (int a = 0; a < 6; ++a) hg[21 + a] += w8 * j8[a] * r8;
+  const int sv = get_global_id(1);
+  const int16 su = (int16)(get_global_id(0) * 16) +
+                   (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  const int16 in_grid = (su < sw) & (int16)(sv < sh ? -1 : 0);
+  // Pixel of each lane (0 outside the sampled grid, so that every read stays valid).
+  const int16 pix = in_grid ? sv * stride * width + su * stride : 0;
+  float16 px, py, pz, pw, qu, prev;
+#define TRACK_LOAD(l)                  \
+  {                                    \
+    const float4 p = vertex[pix.s##l]; \
+    px.s##l = p.x;                     \
+    py.s##l = p.y;                     \
+    pz.s##l = p.z;                     \
+    pw.s##l = p.w;                     \
+    qu.s##l = q[pix.s##l];             \
+    prev.s##l = prev_cost[pix.s##l];   \
   }
-  for (int k = 0; k < 27; ++k) {
-    const float8 h = hg[k];
-    shared[k * TRACK_LOCAL + lid] =
-        ((h.s0 + h.s1) + (h.s2 + h.s3)) + ((h.s4 + h.s5) + (h.s6 + h.s7));
-  }
-  shared[27 * TRACK_LOCAL + lid] = cost_sum;
-  shared[28 * TRACK_LOCAL + lid] = valid;
-  shared[29 * TRACK_LOCAL + lid] = inliers;
-  shared[30 * TRACK_LOCAL + lid] = input;
-  shared[31 * TRACK_LOCAL + lid] = max_w;
-  shared[32 * TRACK_LOCAL + lid] = cost_change;
-  shared[33 * TRACK_LOCAL + lid] = common;
+  EMF_LANES16(TRACK_LOAD)
+#undef TRACK_LOAD
+  const int16 input = in_grid & (pw > 0.0f) & (qu > 0.0f);
+  const float16 x = r0.x * px + r0.y * py + r0.z * pz + r0.w;
+  const float16 y = r1.x * px + r1.y * py + r1.z * pz + r1.w;
+  const float16 z = r2.x * px + r2.y * py + r2.z * pz + r2.w;
+  float16 weight, gx, gy, gz;
+  const float16 r_raw = emf_sample_sdf16(index, dims, voxels, voxel_size, truncation, x, y, z,
+                                         &weight, &gx, &gy, &gz);
+  const int16 valid = input & !isnan(r_raw);
+  // Lanes without a valid sample continue with zeros and are masked out of every term.
+  const float16 r = valid ? r_raw : 0.0f;
+  const float16 abs_r = fabs(r);
+  const int16 inlier = abs_r <= huber_delta;
+  const float16 c = valid ? qu * weight : 0.0f;
+  const float16 cost = c * (inlier ? 0.5f * r * r : huber_delta * (abs_r - 0.5f * huber_delta));
+  const float16 own_cost = valid ? cost : NAN;
+#define TRACK_STORE(l) \
+  if (in_grid.s##l) pixel_cost[pix.s##l] = own_cost.s##l;
+  EMF_LANES16(TRACK_STORE)
+#undef TRACK_STORE
+  const int16 common = valid & (int16)(compare ? -1 : 0) & !isnan(prev);
+  const float16 hw = c * (inlier ? 1.0f : huber_delta / abs_r);
+  const float16 j0 = valid ? gx : 0.0f, j1 = valid ? gy : 0.0f, j2 = valid ? gz : 0.0f;
+  // x cross grad (x may be NaN where the vertex is invalid).
+  const float16 j3 = valid ? y * j2 - z * j1 : 0.0f;
+  const float16 j4 = valid ? z * j0 - x * j2 : 0.0f;
+  const float16 j5 = valid ? x * j1 - y * j0 : 0.0f;
+  __local float16* mine = shared + lid;
+#define TRACK_PUT(k, value) mine[TRACK_ITEMS * (k)] = (value)
+  const float16 w0 = hw * j0, w1 = hw * j1, w2 = hw * j2, w3 = hw * j3, w4 = hw * j4, w5 = hw * j5;
+  TRACK_PUT(0, w0 * j0);
+  TRACK_PUT(1, w0 * j1);
+  TRACK_PUT(2, w0 * j2);
+  TRACK_PUT(3, w0 * j3);
+  TRACK_PUT(4, w0 * j4);
+  TRACK_PUT(5, w0 * j5);
+  TRACK_PUT(6, w1 * j1);
+  TRACK_PUT(7, w1 * j2);
+  TRACK_PUT(8, w1 * j3);
+  TRACK_PUT(9, w1 * j4);
+  TRACK_PUT(10, w1 * j5);
+  TRACK_PUT(11, w2 * j2);
+  TRACK_PUT(12, w2 * j3);
+  TRACK_PUT(13, w2 * j4);
+  TRACK_PUT(14, w2 * j5);
+  TRACK_PUT(15, w3 * j3);
+  TRACK_PUT(16, w3 * j4);
+  TRACK_PUT(17, w3 * j5);
+  TRACK_PUT(18, w4 * j4);
+  TRACK_PUT(19, w4 * j5);
+  TRACK_PUT(20, w5 * j5);
+  TRACK_PUT(21, w0 * r);
+  TRACK_PUT(22, w1 * r);
+  TRACK_PUT(23, w2 * r);
+  TRACK_PUT(24, w3 * r);
+  TRACK_PUT(25, w4 * r);
+  TRACK_PUT(26, w5 * r);
+  TRACK_PUT(27, cost);
+  TRACK_PUT(28, valid ? 1.0f : 0.0f);
+  TRACK_PUT(29, (valid & inlier) ? 1.0f : 0.0f);
+  TRACK_PUT(30, input ? 1.0f : 0.0f);
+  TRACK_PUT(31, valid ? weight : 0.0f);  // TRACK_MAX_TERM
+  TRACK_PUT(32, common ? cost - prev : 0.0f);
+  TRACK_PUT(33, common ? 1.0f : 0.0f);
+#undef TRACK_PUT
   barrier(CLK_LOCAL_MEM_FENCE);
-  if (lid < TRACK_TERMS) {
-    __local const float* col = shared + lid * TRACK_LOCAL;
-    float s = 0.0f;
-    if (lid == TRACK_MAX_TERM) {
-      for (int t = 0; t < TRACK_LOCAL; ++t) s = fmax(s, col[t]);
-    } else {
-      for (int t = 0; t < TRACK_LOCAL; ++t) s += col[t];
-    }
-    partials[get_group_id(0) * TRACK_TERMS + lid] = s;
-  }
+  // Work item k adds up terms k, k + 16 and k + 32 (written out, no loops: see above).
+  __global float* row =
+      partials + (get_group_id(0) + get_num_groups(0) * get_group_id(1)) * TRACK_TERMS;
+  track_reduce_term(shared, lid, row);
+  track_reduce_term(shared, lid + TRACK_ITEMS, row);
+  if (lid + 2 * TRACK_ITEMS < TRACK_TERMS) track_reduce_term(shared, lid + 2 * TRACK_ITEMS, row);
 }
 
 // Second stage of the device-side reduction: one work item per term sums the per-group

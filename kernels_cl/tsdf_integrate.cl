@@ -2,10 +2,10 @@
 // (METHOD.md step 4), with the per-pixel association weight q, the weight cap W_max, the
 // authors' free-space rule, and the foreground/background count update of object volumes.
 //
-// integrate_blocks: one work-group of 512 work-items per listed block (from assign_blocks), one
-// work-item per voxel. Scalar, branch-free code with one unconditional store per voxel, so that
-// CPU compilers (PoCL) can vectorise the work-item loop. Each voxel centre is projected to its
-// nearest pixel u; with d = D(u) - z (projective distance along the camera axis):
+// integrate_blocks: one work-group per listed block (from assign_blocks), 32 work items of 16
+// voxels each (explicit SIMD, branch-free, one unconditional store per voxel). Each voxel centre
+// is projected to its nearest pixel u; with d = D(u) - z (projective distance along the camera
+// axis):
 //   d < -truncation                skipped (occluded / behind the surface)
 //   -truncation <= d <= truncation band: observation tsdf = d / truncation with weight q(u)
 //   d > truncation                 free space: tsdf = 1 with weight q(u), or 1 when
@@ -13,12 +13,14 @@
 //   psi <- (W psi + w tsdf) / (W + w),  W <- min(W_max, W + w)   (skipped when w <= 0)
 // count_blocks (object volumes, detection frames): with the detection mask m (p_fg of the
 // detection per pixel; NaN where the object is occluded or no update is wanted), voxels in the
-// band (|d| <= truncation) get Fg += m(u), Bg += 1 - m(u). Same projection as integrate_blocks.
+// band (|d| <= truncation) get Fg += m(u), Bg += 1 - m(u). Same projection as integrate_blocks;
+// one work-group of 512 work items (one per voxel) per block.
 #include "map_common.clh"
 
 /// rint for |x| < 2^22 without a builtin call (round half to even, the default FP mode):
 /// adding and subtracting 1.5 * 2^23 drops the fraction bits with IEEE rounding.
 inline float emf_round_even(float x) { return (x + 12582912.0f) - 12582912.0f; }
+inline float16 emf_round_even16(float16 x) { return (x + 12582912.0f) - 12582912.0f; }
 
 /// Camera-frame centre of voxel `lid` (0..511, x fastest) of block `lin`: pc = (xc, yc, zc).
 #define EMF_VOXEL_IN_CAMERA(lin, lid)                                                    \
@@ -43,35 +45,75 @@ inline float emf_round_even(float x) { return (x + 12582912.0f) - 12582912.0f; }
   /* NaN depth fails every comparison. */                                                \
   const bool observed = in_view && d_meas > 0.0f && sdf >= -truncation;
 
-__kernel void integrate_blocks(__global const int* block_list, __global const int* index,
-                               const int4 dims, __global short2* voxels,
-                               __global const float* depth, __global const float* weights,
-                               const int has_weights, const int width, const int height,
-                               const float fx, const float fy, const float cx, const float cy,
-                               const float4 r0, const float4 r1, const float4 r2,
-                               const float voxel_size, const float truncation,
-                               const float inv_truncation, const float max_weight,
-                               const int free_space_full_weight) {
+// integrate_blocks runs 32 work items per block, each on 16 consecutive voxels held in the
+// lanes of 16-wide vectors: PoCL does not vectorise the one-voxel-per-item form (clang's front
+// end packs pairs of its scalar operations into 2-wide vectors, which keeps the work-item loop
+// scalar), so the SIMD is spelled out. Per lane the operations are those of one voxel above.
+#define EMF_INTEGRATE_ITEMS 32
+
+/// A voxel word (see EMF_WORD_TSDF) from its quantised TSDF and weight (int16 lanes).
+#ifdef __ENDIAN_LITTLE__
+#define EMF_MAKE_WORD16(t, w) (((t)&0xffff) | ((w) << 16))
+#else
+#define EMF_MAKE_WORD16(t, w) (((w)&0xffff) | ((t) << 16))
+#endif
+
+__kernel __attribute__((reqd_work_group_size(EMF_INTEGRATE_ITEMS, 1, 1))) void integrate_blocks(
+    __global const int* block_list, __global const int* index, const int4 dims,
+    __global short2* voxels, __global const float* depth, __global const float* weights,
+    const int has_weights, const int width, const int height, const float fx, const float fy,
+    const float cx, const float cy, const float4 r0, const float4 r1, const float4 r2,
+    const float voxel_size, const float truncation, const float inv_truncation,
+    const float max_weight, const int free_space_full_weight) {
   const int lin = block_list[get_group_id(0)];
   const int slot = index[lin];
-  const int lid = get_local_id(0);
-  EMF_VOXEL_IN_CAMERA(lin, lid)
-  const float q = has_weights ? weights[pixel] : 1.0f;
-  const bool free_space = sdf > truncation;
-  const float w = (free_space && free_space_full_weight) ? 1.0f : q;
-  __global short* raw = (__global short*)voxels + 2 * (slot * EMF_BLOCK_VOXELS + lid);
-  const short old_t = raw[0];
-  const short old_w = raw[1];
-  const float w_old = (float)old_w / EMF_WEIGHT_SCALE;
-  const float w_sum = w_old + w;
-  const float tsdf_obs = sdf * inv_truncation < 1.0f ? sdf * inv_truncation : 1.0f;
-  float tsdf_new = (w_old * ((float)old_t / EMF_TSDF_SCALE) + w * tsdf_obs) / w_sum;
+  const int plane = dims.x * dims.y;
+  const int bz = lin / plane;
+  const int by = (lin - bz * plane) / dims.x;
+  const int bx = lin - bz * plane - by * dims.x;
+  // Voxels 16 * item .. 16 * item + 15 of the block (x fastest).
+  const int16 vid =
+      (int16)(get_local_id(0) * 16) + (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  const float16 px_v = (convert_float16(bx * EMF_BLOCK + (vid & 7)) + 0.5f) * voxel_size;
+  const float16 py_v = (convert_float16(by * EMF_BLOCK + ((vid >> 3) & 7)) + 0.5f) * voxel_size;
+  const float16 pz_v = (convert_float16(bz * EMF_BLOCK + (vid >> 6)) + 0.5f) * voxel_size;
+  const float16 xc = r0.x * px_v + r0.y * py_v + r0.z * pz_v + r0.w;
+  const float16 yc = r1.x * px_v + r1.y * py_v + r1.z * pz_v + r1.w;
+  const float16 zc = r2.x * px_v + r2.y * py_v + r2.z * pz_v + r2.w;
+  const float16 inv_z = 1.0f / zc;
+  const float16 u = fx * (xc * inv_z) + cx + 0.5f;
+  const float16 v = fy * (yc * inv_z) + cy + 0.5f;
+  const int16 in_view =
+      (zc > 0.0f) & (u >= 0.0f) & (v >= 0.0f) & (u < (float)width) & (v < (float)height);
+  // Lanes out of view read pixel 0 (converted from 0, never from NaN or out-of-range values).
+  const int16 pixel = convert_int16(in_view ? v : 0.0f) * width + convert_int16(in_view ? u : 0.0f);
+  float16 d_meas, q;
+#define EMF_INTEGRATE_READ(l)      \
+  d_meas.s##l = depth[pixel.s##l]; \
+  q.s##l = has_weights ? weights[pixel.s##l] : 1.0f;
+  EMF_LANES16(EMF_INTEGRATE_READ)
+#undef EMF_INTEGRATE_READ
+  const float16 sdf = d_meas - zc;
+  // NaN depth fails every comparison.
+  const int16 observed = in_view & (d_meas > 0.0f) & (sdf >= -truncation);
+  const int16 free_space = sdf > truncation;
+  const float16 w = (free_space & (int16)(free_space_full_weight ? -1 : 0)) ? 1.0f : q;
+  __global int* words = (__global int*)voxels + slot * EMF_BLOCK_VOXELS + get_local_id(0) * 16;
+  const int16 raw = vload16(0, words);
+  const int16 old_t = EMF_WORD_TSDF(raw);
+  const int16 old_w = EMF_WORD_WEIGHT(raw);
+  const float16 w_old = convert_float16(old_w) / EMF_WEIGHT_SCALE;
+  const float16 w_sum = w_old + w;
+  const float16 tsdf_obs = sdf * inv_truncation < 1.0f ? sdf * inv_truncation : 1.0f;
+  float16 tsdf_new = (w_old * (convert_float16(old_t) / EMF_TSDF_SCALE) + w * tsdf_obs) / w_sum;
   tsdf_new = tsdf_new < -1.0f ? -1.0f : (tsdf_new > 1.0f ? 1.0f : tsdf_new);
-  float w_new = w_sum < max_weight ? w_sum : max_weight;
+  float16 w_new = w_sum < max_weight ? w_sum : max_weight;
   w_new = w_new < 32767.0f / EMF_WEIGHT_SCALE ? w_new : 32767.0f / EMF_WEIGHT_SCALE;
-  const bool update = observed && w > 0.0f;
-  raw[0] = update ? (short)emf_round_even(tsdf_new * EMF_TSDF_SCALE) : old_t;
-  raw[1] = update ? (short)emf_round_even(w_new * EMF_WEIGHT_SCALE) : old_w;
+  const int16 update = observed & (w > 0.0f);
+  // Converted only where updated (elsewhere tsdf_new may be NaN: 0 / 0).
+  const int16 new_t = convert_int16(emf_round_even16(update ? tsdf_new * EMF_TSDF_SCALE : 0.0f));
+  const int16 new_w = convert_int16(emf_round_even16(update ? w_new * EMF_WEIGHT_SCALE : 0.0f));
+  vstore16(update ? EMF_MAKE_WORD16(new_t, new_w) : raw, 0, words);
 }
 
 __kernel void count_blocks(__global const int* block_list, __global const int* count_index,

@@ -12,8 +12,9 @@ namespace emf::map {
 
 namespace {
 
-constexpr int kIntegrateGroup = 512;  // work-items per block in integrate_blocks (one per voxel)
-constexpr int kVolumeStateInts = 8;   // layout in kernels_cl/map_alloc.cl (EMF_VOL_*)
+constexpr int kIntegrateItems = 32;  // work items per block in integrate_blocks (16 voxels each)
+constexpr int kCountGroup = 512;     // work items per block in count_blocks (one per voxel)
+constexpr int kVolumeStateInts = 8;  // layout in kernels_cl/map_alloc.cl (EMF_VOL_*)
 constexpr int kVolumeReport = 4;
 
 int blocksFor(int voxels) { return (voxels + kBlockSize - 1) / kBlockSize; }
@@ -174,7 +175,9 @@ AllocationReport Volume::allocate(const IntegrationInput& frame) {
               row4(T_volume_camera, 1), row4(T_volume_camera, 2),
               static_cast<cl_float>(static_cast<float>(kBlockSize) * spec_.voxel_size_m),
               static_cast<cl_float>(spec_.truncation_m), dims, needed_);
-  cl::enqueue(ctx_.queue(), mark_, static_cast<size_t>(w), static_cast<size_t>(h), 0, 16, 16);
+  // 16 pixels of a row per work item.
+  cl::enqueue(ctx_.queue(), mark_, static_cast<size_t>((w + 15) / 16), static_cast<size_t>(h), 0, 4,
+              16);
 
   const cl_int block_count = spec_.blockCount();
   cl::setArgs(assign_, needed_, index_, countIndex(), static_cast<cl_int>(spec_.has_counts),
@@ -198,7 +201,7 @@ void Volume::integrate(const IntegrationInput& frame) {
   const PoseRows T_camera_volume = PoseRows::from(frame.T_world_camera.inverse() * T_world_volume_);
   const io::Intrinsics& k = frame.intrinsics;
   const MapOptions& o = pool_.options();
-  const size_t global = static_cast<size_t>(last_report_.listed_blocks) * kIntegrateGroup;
+  const size_t blocks = static_cast<size_t>(last_report_.listed_blocks);
   cl::setArgs(integrate_, block_list_, index_, dimsBlocks(), pool_.voxels(), *frame.depth,
               frame.weights ? *frame.weights : pool_.dummy(),
               static_cast<cl_int>(frame.weights != nullptr), static_cast<cl_int>(k.width),
@@ -208,7 +211,7 @@ void Volume::integrate(const IntegrationInput& frame) {
               static_cast<cl_float>(spec_.voxel_size_m), static_cast<cl_float>(spec_.truncation_m),
               static_cast<cl_float>(1.0f / spec_.truncation_m), static_cast<cl_float>(o.max_weight),
               static_cast<cl_int>(spec_.free_space_full_weight));
-  cl::enqueue(ctx_.queue(), integrate_, global, 0, 0, kIntegrateGroup);
+  cl::enqueue(ctx_.queue(), integrate_, blocks * kIntegrateItems, 0, 0, kIntegrateItems);
   if (spec_.has_counts && frame.fg_mask) {
     cl::setArgs(count_, block_list_, count_index_, dimsBlocks(), pool_.voxels(), *frame.depth,
                 *frame.fg_mask, static_cast<cl_int>(k.width), static_cast<cl_int>(k.height),
@@ -217,7 +220,7 @@ void Volume::integrate(const IntegrationInput& frame) {
                 row4(T_camera_volume, 1), row4(T_camera_volume, 2),
                 static_cast<cl_float>(spec_.voxel_size_m),
                 static_cast<cl_float>(spec_.truncation_m));
-    cl::enqueue(ctx_.queue(), count_, global, 0, 0, kIntegrateGroup);
+    cl::enqueue(ctx_.queue(), count_, blocks * kCountGroup, 0, 0, kCountGroup);
   }
 }
 

@@ -127,8 +127,8 @@ void Preprocessor::process(cl_mem depth_m) {
               static_cast<float>(o.max_depth_m), static_cast<float>(intrinsics_.fx),
               static_cast<float>(intrinsics_.fy), static_cast<float>(intrinsics_.cx),
               static_cast<float>(intrinsics_.cy));
-  // Eight pixels per work item along x.
-  cl::enqueue(ctx_.queue(), kernel_, static_cast<size_t>((intrinsics_.width + 7) / 8),
+  // Sixteen pixels per work item along x.
+  cl::enqueue(ctx_.queue(), kernel_, static_cast<size_t>((intrinsics_.width + 15) / 16),
               static_cast<size_t>(intrinsics_.height), 0, 8, 8);
 }
 

@@ -14,11 +14,12 @@ namespace {
 
 // Must match kernels_cl/track_reduce.cl.
 constexpr int kTerms = 34;
-constexpr int kLocalSize = 64;
-// Each work item handles about this many pixels before the work-group reduction; the group
-// count is capped so the partials stay small (host sum or second kernel).
-constexpr int kPixelsPerItem = 16;
-constexpr int kMaxGroups = 1024;
+// Work-group shape of track_accumulate (2D over the sampled grid, each work item takes 16
+// consecutive sampled columns of one row): 2 x 8 items = 32 sampled columns x 8 rows.
+constexpr int kLanes = 16;
+constexpr int kLocalX = 2;
+constexpr int kLocalY = 8;
+constexpr int kLocalSize = kLocalX * kLocalY;
 constexpr double kPi = 3.14159265358979323846;
 
 enum Term : int {
@@ -167,27 +168,28 @@ Tracker::Tracker(cl::Context& ctx, const TrackOptions& options, int width, int h
     throw ConfigError("track.final_reduction must be host or device, got '" +
                       options_.final_reduction + "'");
   }
-  const std::string defs = "-DTRACK_LOCAL=" + std::to_string(kLocalSize);
+  const std::string defs =
+      "-DTRACK_LX=" + std::to_string(kLocalX) + " -DTRACK_LY=" + std::to_string(kLocalY);
   accumulate_ = ctx_.kernel("track_reduce", "track_accumulate", defs);
   reduce_ = ctx_.kernel("track_reduce", "track_reduce_partials", defs);
-  partials_ = ctx_.buffer(CL_MEM_READ_WRITE, sizeof(float) * kTerms * kMaxGroups);
+  const int max_groups = numGroups(1);
+  partials_ = ctx_.buffer(CL_MEM_READ_WRITE, sizeof(float) * kTerms * max_groups);
   reduced_ = ctx_.buffer(CL_MEM_READ_WRITE, sizeof(float) * kTerms);
   const std::vector<float> ones(static_cast<size_t>(width) * height, 1.0f);
   ones_ = ctx_.buffer(CL_MEM_READ_ONLY, ones.size() * sizeof(float), ones.data());
   for (auto& c : costs_) {
     c = ctx_.buffer(CL_MEM_READ_WRITE, ones.size() * sizeof(float));
   }
-  host_partials_.resize(static_cast<size_t>(kTerms) * kMaxGroups);
+  host_partials_.resize(static_cast<size_t>(kTerms) * max_groups);
 }
 
 int Tracker::localSize() { return kLocalSize; }
 
 int Tracker::numGroups(int stride) const {
-  const long sw = (width_ + stride - 1) / stride;
-  const long sh = (height_ + stride - 1) / stride;
-  const long per_group = static_cast<long>(kLocalSize) * kPixelsPerItem;  // multiple of 8
-  return static_cast<int>(
-      std::clamp((sw * sh + per_group - 1) / per_group, 1L, static_cast<long>(kMaxGroups)));
+  const int sw = (width_ + stride - 1) / stride;
+  const int sh = (height_ + stride - 1) / stride;
+  const int items_x = (sw + kLanes - 1) / kLanes;
+  return ((items_x + kLocalX - 1) / kLocalX) * ((sh + kLocalY - 1) / kLocalY);
 }
 
 NormalEquations Tracker::evaluate(const map::VolumeDeviceView& volume, cl_mem vertex_map, cl_mem q,
@@ -227,8 +229,10 @@ NormalEquations Tracker::evaluateCandidate(const map::VolumeDeviceView& volume, 
               rows[1], rows[2], volume.index, dims, volume.voxels, volume.voxel_size_m,
               volume.truncation_m, delta, costs_[current_].get(), costs_[1 - current_].get(),
               compare ? 1 : 0, partials_.get());
-  cl::enqueue(ctx_.queue(), accumulate_, static_cast<size_t>(groups) * kLocalSize, 0, 0,
-              kLocalSize);
+  const int sw = (width_ + stride - 1) / stride;
+  const int sh = (height_ + stride - 1) / stride;
+  cl::enqueue(ctx_.queue(), accumulate_, static_cast<size_t>((sw + kLanes - 1) / kLanes),
+              static_cast<size_t>(sh), 0, kLocalX, kLocalY);
   double t[kTerms] = {};
   if (options_.final_reduction == "device") {
     cl::setArgs(reduce_, partials_.get(), groups, reduced_.get());

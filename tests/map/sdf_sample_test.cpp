@@ -44,6 +44,31 @@ class SdfSampling : public MapTest {
     return s;
   }
 
+  /// The same points through emf_sample_sdf16 (kernel sample_sdf_points16; no p_fg).
+  Samples sampleOnDevice16(const map::Volume& vol, const std::vector<Eigen::Vector3f>& pts) {
+    const int n = static_cast<int>(pts.size());
+    std::vector<cl_float4> p4(pts.size());
+    for (size_t i = 0; i < pts.size(); ++i) p4[i] = {{pts[i].x(), pts[i].y(), pts[i].z(), 0.f}};
+    cl::MemHandle dp = ctx().buffer(CL_MEM_READ_ONLY, p4.size() * sizeof(cl_float4), p4.data());
+    cl::MemHandle dpsi = ctx().buffer(CL_MEM_WRITE_ONLY, pts.size() * sizeof(float));
+    cl::MemHandle dw = ctx().buffer(CL_MEM_WRITE_ONLY, pts.size() * sizeof(float));
+    cl::MemHandle dg = ctx().buffer(CL_MEM_WRITE_ONLY, pts.size() * sizeof(cl_float4));
+    cl::KernelHandle k = ctx().kernel("sdf_sample", "sample_sdf_points16");
+    const map::VolumeSpec& spec = vol.spec();
+    cl::setArgs(k, vol.index(), vol.dimsBlocks(), vol.pool().voxels(),
+                static_cast<cl_float>(spec.voxel_size_m), static_cast<cl_float>(spec.truncation_m),
+                dp, static_cast<cl_int>(n), dpsi, dw, dg);
+    cl::enqueue(ctx().queue(), k, static_cast<size_t>((n + 15) / 16));
+    Samples s;
+    s.psi.resize(pts.size());
+    s.weight.resize(pts.size());
+    s.grad.resize(pts.size());
+    ctx().read(dpsi, s.psi.data(), pts.size() * sizeof(float));
+    ctx().read(dw, s.weight.data(), pts.size() * sizeof(float));
+    ctx().read(dg, s.grad.data(), pts.size() * sizeof(cl_float4));
+    return s;
+  }
+
   /// Points near the sphere surface plus points exactly around block borders.
   static std::vector<Eigen::Vector3f> testPoints(const Eigen::Vector3f& centre_v, float radius,
                                                  float voxel, int n) {
@@ -99,12 +124,14 @@ TEST_F(SdfSampling, DeviceMatchesReferenceAcrossBlockBorders) {
   const std::vector<Eigen::Vector3f> pts =
       testPoints(centre_v, static_cast<float>(s.radius_m), spec.voxel_size_m, 4000);
   const Samples d = sampleOnDevice(vol, pts);
+  const Samples d16 = sampleOnDevice16(vol, pts);
   int valid = 0, borders_valid = 0;
   for (size_t i = 0; i < pts.size(); ++i) {
     float psi = 0, w = 0;
     Eigen::Vector3f g;
     const bool ok = map::sampleSdfReference(h.view(), pts[i], &psi, &w, &g);
     ASSERT_EQ(ok, !std::isnan(d.psi[i])) << "point " << i;
+    ASSERT_EQ(ok, !std::isnan(d16.psi[i])) << "point " << i << " (16 lanes)";
     EXPECT_NEAR(d.pfg[i], map::samplePfgReference(h.view(), pts[i]), kPfgTolerance) << i;
     if (!ok) continue;
     ++valid;
@@ -112,6 +139,11 @@ TEST_F(SdfSampling, DeviceMatchesReferenceAcrossBlockBorders) {
     EXPECT_NEAR(d.psi[i], psi, kPsiToleranceM) << i;
     EXPECT_NEAR(d.weight[i], w, kWeightTolerance) << i;
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(d.grad[i].s[c], g[c], kGradientTolerance) << i;
+    EXPECT_NEAR(d16.psi[i], psi, kPsiToleranceM) << i << " (16 lanes)";
+    EXPECT_NEAR(d16.weight[i], w, kWeightTolerance) << i << " (16 lanes)";
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_NEAR(d16.grad[i].s[c], g[c], kGradientTolerance) << i << " (16 lanes)";
+    }
   }
   EXPECT_GT(valid, 2000);
   EXPECT_GT(borders_valid, 500);
