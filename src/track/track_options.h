@@ -63,7 +63,9 @@ struct TrackOptions {
   /// After a lost call on a volume, its next calls must reach this inlier ratio until one is
   /// not lost: there is no relocalisation, so a pose re-acquired near the last good one after
   /// the camera moved on is often a wrong but locally consistent fit (0.76-0.85 seen on the
-  /// cabinet keyframes, about 1 m off). 0 = no extra rule.
+  /// cabinet keyframes, about 1 m off). Capped at the volume's typical inlier ratio (running
+  /// mean of its tracked calls) minus 0.05, so that a noisy sensor whose good frames stay below
+  /// it can recover (synthetic Kinect-v1 noise at 1 cm voxels: ~0.85). 0 = no extra rule.
   double recovery_min_inlier_ratio = 0.9;
   /// Lost when the inverse condition number of the balanced Hessian (rotation block scaled to
   /// the translation block's trace) is below this: the geometry does not constrain all 6 DoF.

@@ -21,6 +21,11 @@ constexpr int kLocalX = 2;
 constexpr int kLocalY = 8;
 constexpr int kLocalSize = kLocalX * kLocalY;
 constexpr double kPi = 3.14159265358979323846;
+// Recovery after a lost call asks for at most the volume's typical inlier ratio minus this
+// margin (noisy sensors: good synthetic Kinect-v1 frames at 1 cm voxels reach only ~0.85), and
+// the typical ratio follows the tracked calls at this rate.
+constexpr double kRecoveryMargin = 0.05;
+constexpr double kTypicalRate = 0.1;
 // Accepted steps below early_exit_step / 10 in a row that end a level as converged (a stall).
 constexpr int kStallSteps = 5;
 
@@ -392,12 +397,13 @@ TrackResult Tracker::track(const map::VolumeDeviceView& volume, cl_mem vertex_ma
     why << "inlier ratio " << result.inlier_ratio << " (" << ne.inliers << " of " << ne.valid
         << " points within the Huber delta) is below track.min_inlier_ratio "
         << options_.min_inlier_ratio;
-  } else if (recovering(volume.index) && result.inlier_ratio < options_.recovery_min_inlier_ratio) {
+  } else if (recovering(volume.index) && result.inlier_ratio < recoveryInlierRatio(volume.index)) {
     result.loss = TrackLoss::kFewInliers;
     why << "recovering after a lost frame: inlier ratio " << result.inlier_ratio << " ("
-        << ne.inliers << " of " << ne.valid
-        << " points within the Huber delta) is below track.recovery_min_inlier_ratio "
-        << options_.recovery_min_inlier_ratio;
+        << ne.inliers << " of " << ne.valid << " points within the Huber delta) is below "
+        << recoveryInlierRatio(volume.index) << " (track.recovery_min_inlier_ratio "
+        << options_.recovery_min_inlier_ratio << ", at most the volume's typical inlier ratio - "
+        << kRecoveryMargin << ")";
   } else if (result.inverse_condition < options_.min_inverse_condition) {
     result.loss = TrackLoss::kDegenerate;
     why << "degenerate geometry: inverse condition number " << result.inverse_condition
@@ -410,10 +416,25 @@ TrackResult Tracker::track(const map::VolumeDeviceView& volume, cl_mem vertex_ma
   }
   result.lost = result.loss != TrackLoss::kNone;
   result.loss_reason = why.str();
+  if (!result.lost) {
+    // Running typical inlier ratio of the volume's tracked calls.
+    const auto t = typical_inliers_.find(volume.index);
+    if (t == typical_inliers_.end()) {
+      typical_inliers_[volume.index] = result.inlier_ratio;
+    } else {
+      t->second += kTypicalRate * (result.inlier_ratio - t->second);
+    }
+  }
   const auto it = std::find(lost_volumes_.begin(), lost_volumes_.end(), volume.index);
   if (result.lost && it == lost_volumes_.end()) lost_volumes_.push_back(volume.index);
   if (!result.lost && it != lost_volumes_.end()) lost_volumes_.erase(it);
   return result;
+}
+
+double Tracker::recoveryInlierRatio(cl_mem volume_index) const {
+  const auto t = typical_inliers_.find(volume_index);
+  if (t == typical_inliers_.end()) return options_.recovery_min_inlier_ratio;
+  return std::min(options_.recovery_min_inlier_ratio, t->second - kRecoveryMargin);
 }
 
 bool Tracker::recovering(cl_mem volume_index) const {

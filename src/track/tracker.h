@@ -35,6 +35,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <map>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -131,6 +132,9 @@ class Tracker {
 
   /// True when the last track() call on the volume with this index buffer was lost.
   bool recovering(cl_mem volume_index) const;
+  /// Inlier ratio a recovering call on the volume must reach: recovery_min_inlier_ratio, at
+  /// most the volume's typical (running) inlier ratio minus a margin.
+  double recoveryInlierRatio(cl_mem volume_index) const;
 
   const TrackOptions& options() const { return options_; }
   int width() const { return width_; }
@@ -166,7 +170,8 @@ class Tracker {
   cl::MemHandle costs_[2];  // per-pixel costs: accepted (current_) and candidate
   int current_ = 0;
   std::vector<float> host_partials_;
-  std::vector<cl_mem> lost_volumes_;  // index buffers of volumes whose last call was lost
+  std::vector<cl_mem> lost_volumes_;          // index buffers of volumes whose last call was lost
+  std::map<cl_mem, double> typical_inliers_;  // running inlier ratio of each volume's tracked calls
 };
 
 /// Inverse condition number of H after balancing: the rotation block is scaled so that its
