@@ -21,7 +21,10 @@ class SdfSampling : public MapTest {
     std::vector<float> psi, weight, pfg;
     std::vector<cl_float4> grad;
   };
-  Samples sampleOnDevice(const map::Volume& vol, const std::vector<Eigen::Vector3f>& pts) {
+  /// psi, weight, gradient and p_fg at `pts` through sample_sdf_points (SdfSampler), or with
+  /// `lanes16` through emf_sample_sdf16 (kernel sample_sdf_points16; no p_fg).
+  Samples sampleOnDevice(const map::Volume& vol, const std::vector<Eigen::Vector3f>& pts,
+                         bool lanes16 = false) {
     const int n = static_cast<int>(pts.size());
     std::vector<cl_float4> p4(pts.size());
     for (size_t i = 0; i < pts.size(); ++i) p4[i] = {{pts[i].x(), pts[i].y(), pts[i].z(), 0.f}};
@@ -30,35 +33,18 @@ class SdfSampling : public MapTest {
     cl::MemHandle dw = ctx().buffer(CL_MEM_WRITE_ONLY, pts.size() * sizeof(float));
     cl::MemHandle dg = ctx().buffer(CL_MEM_WRITE_ONLY, pts.size() * sizeof(cl_float4));
     cl::MemHandle dpfg = ctx().buffer(CL_MEM_WRITE_ONLY, pts.size() * sizeof(float));
-    map::SdfSampler sampler(ctx());
-    sampler.sample(vol, dp, n, dpsi, dw, dg, dpfg);
-    Samples s;
-    s.psi.resize(pts.size());
-    s.weight.resize(pts.size());
-    s.pfg.resize(pts.size());
-    s.grad.resize(pts.size());
-    ctx().read(dpsi, s.psi.data(), pts.size() * sizeof(float));
-    ctx().read(dw, s.weight.data(), pts.size() * sizeof(float));
-    ctx().read(dpfg, s.pfg.data(), pts.size() * sizeof(float));
-    ctx().read(dg, s.grad.data(), pts.size() * sizeof(cl_float4));
-    return s;
-  }
-
-  /// The same points through emf_sample_sdf16 (kernel sample_sdf_points16; no p_fg).
-  Samples sampleOnDevice16(const map::Volume& vol, const std::vector<Eigen::Vector3f>& pts) {
-    const int n = static_cast<int>(pts.size());
-    std::vector<cl_float4> p4(pts.size());
-    for (size_t i = 0; i < pts.size(); ++i) p4[i] = {{pts[i].x(), pts[i].y(), pts[i].z(), 0.f}};
-    cl::MemHandle dp = ctx().buffer(CL_MEM_READ_ONLY, p4.size() * sizeof(cl_float4), p4.data());
-    cl::MemHandle dpsi = ctx().buffer(CL_MEM_WRITE_ONLY, pts.size() * sizeof(float));
-    cl::MemHandle dw = ctx().buffer(CL_MEM_WRITE_ONLY, pts.size() * sizeof(float));
-    cl::MemHandle dg = ctx().buffer(CL_MEM_WRITE_ONLY, pts.size() * sizeof(cl_float4));
-    cl::KernelHandle k = ctx().kernel("sdf_sample", "sample_sdf_points16");
-    const map::VolumeSpec& spec = vol.spec();
-    cl::setArgs(k, vol.index(), vol.dimsBlocks(), vol.pool().voxels(),
-                static_cast<cl_float>(spec.voxel_size_m), static_cast<cl_float>(spec.truncation_m),
-                dp, static_cast<cl_int>(n), dpsi, dw, dg);
-    cl::enqueue(ctx().queue(), k, static_cast<size_t>((n + 15) / 16));
+    if (lanes16) {
+      cl::KernelHandle k = ctx().kernel("sdf_sample", "sample_sdf_points16");
+      const map::VolumeSpec& spec = vol.spec();
+      cl::setArgs(k, vol.index(), vol.dimsBlocks(), vol.pool().voxels(),
+                  static_cast<cl_float>(spec.voxel_size_m),
+                  static_cast<cl_float>(spec.truncation_m), dp, static_cast<cl_int>(n), dpsi, dw,
+                  dg);
+      cl::enqueue(ctx().queue(), k, static_cast<size_t>((n + 15) / 16));
+    } else {
+      map::SdfSampler sampler(ctx());
+      sampler.sample(vol, dp, n, dpsi, dw, dg, dpfg);
+    }
     Samples s;
     s.psi.resize(pts.size());
     s.weight.resize(pts.size());
@@ -66,6 +52,10 @@ class SdfSampling : public MapTest {
     ctx().read(dpsi, s.psi.data(), pts.size() * sizeof(float));
     ctx().read(dw, s.weight.data(), pts.size() * sizeof(float));
     ctx().read(dg, s.grad.data(), pts.size() * sizeof(cl_float4));
+    if (!lanes16) {
+      s.pfg.resize(pts.size());
+      ctx().read(dpfg, s.pfg.data(), pts.size() * sizeof(float));
+    }
     return s;
   }
 
@@ -124,7 +114,7 @@ TEST_F(SdfSampling, DeviceMatchesReferenceAcrossBlockBorders) {
   const std::vector<Eigen::Vector3f> pts =
       testPoints(centre_v, static_cast<float>(s.radius_m), spec.voxel_size_m, 4000);
   const Samples d = sampleOnDevice(vol, pts);
-  const Samples d16 = sampleOnDevice16(vol, pts);
+  const Samples d16 = sampleOnDevice(vol, pts, true);
   int valid = 0, borders_valid = 0;
   for (size_t i = 0; i < pts.size(); ++i) {
     float psi = 0, w = 0;
