@@ -30,6 +30,9 @@ track::TrackOptions objectTrackOptions(const track::TrackOptions& camera) {
   o.recovery_min_inlier_ratio = o.min_inlier_ratio;
   // Objects cover few pixels: all of them are used at the finest level.
   o.pixel_stride = 1;
+  // Rotations about the object's own points: the camera is metres away from a small object
+  // (cars preset, 90 frames at 320x240, car ATE 3.3 / 4.7 cm vs 4.0 / 6.9 about the camera).
+  o.rotation_centre = "stiffness";
   return o;
 }
 

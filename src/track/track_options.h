@@ -51,6 +51,15 @@ struct TrackOptions {
   double max_step_scale = 8.0;
   /// Where the per-work-group partial sums are added up: "host" or "device" (second kernel).
   std::string final_reduction = "host";
+  /// Centre of the rotation increments LM solves for: "camera" (the camera centre, the usual
+  /// camera-frame parametrisation), "stiffness" (stiffnessCentre of the Hessian: about the
+  /// centroid of the constraining points) or "origin" (the volume's origin, the left increments
+  /// as such). Only the LM path and step sizes change, not the minimum: a far origin couples
+  /// rotation and translation (a 7.68 m background lost 230 of redkitchen's 300 frames and
+  /// LM needed 1.6x the iterations). bench/slam_bench, redkitchen 300 frames at 640x480:
+  /// track 17.8 ms (origin) -> 11.0 ms (camera or stiffness), ATE 2.254 -> 2.252 cm. Objects
+  /// use "stiffness" (pipeline::objectTrackOptions): the camera is metres from a small object.
+  std::string rotation_centre = "camera";
 
   // Tracking loss: a frame is lost when any rule fires (evaluated at the final pose, finest
   // level). See track::Tracker.
@@ -98,6 +107,8 @@ struct TrackOptions {
            "LM step extrapolation limit where the cost falls faster than predicted (1 = off)");
     b.choice("final_reduction", final_reduction, {"host", "device"},
              "where the per-work-group partial sums are added");
+    b.choice("rotation_centre", rotation_centre, {"camera", "stiffness", "origin"},
+             "centre of the rotation increments LM solves for (objects: stiffness)");
     b.real("min_valid_fraction", min_valid_fraction, 0.0, 1.0, "",
            "lost below this fraction of depth pixels landing on the observed map");
     b.real("min_inlier_ratio", min_inlier_ratio, 0.0, 1.0, "",

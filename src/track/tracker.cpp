@@ -151,7 +151,34 @@ NormalEquations accumulateReference(const map::VolumeHostView& volume, const cv:
   return ne;
 }
 
-double balancedInverseCondition(const Matrix6d& H) {
+Eigen::Vector3d stiffnessCentre(const Matrix6d& H) {
+  // Increments about a centre c: J' = (g, (x - c) x g) = M J with M = [[I, 0], [-[c]x, I]], so
+  // the coupling block of M H M^T is H_rt - [c]x H_tt. Its least-squares zero: for every
+  // column h_k of H_tt, c x h_k = (H_rt)_k, i.e. -[h_k]x c = (H_rt)_k (9 equations). For
+  // constraints spread evenly over the points this is their weighted centroid; along
+  // directions the translation block does not constrain, a small ridge keeps c at the origin.
+  Eigen::Matrix3d AtA = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d Atb = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Matrix3d A = -hat(H.block<3, 1>(0, k));
+    AtA += A.transpose() * A;
+    Atb += A.transpose() * H.block<3, 1>(3, k);
+  }
+  const double ridge = 1e-9 * AtA.trace();
+  if (!(ridge > 0.0) || !std::isfinite(ridge)) return Eigen::Vector3d::Zero();
+  const Eigen::Vector3d c = (AtA + ridge * Eigen::Matrix3d::Identity()).ldlt().solve(Atb);
+  return c.allFinite() ? c : Eigen::Vector3d::Zero();
+}
+
+Matrix6d centringMap(const Eigen::Vector3d& c) {
+  Matrix6d M = Matrix6d::Identity();
+  M.bottomLeftCorner<3, 3>() = -hat(c);
+  return M;
+}
+
+double balancedInverseCondition(const Matrix6d& H_origin) {
+  const Matrix6d M = centringMap(stiffnessCentre(H_origin));
+  const Matrix6d H = M * H_origin * M.transpose();
   const double tt = H.topLeftCorner<3, 3>().trace();
   const double rr = H.bottomRightCorner<3, 3>().trace();
   if (!(tt > 0.0) || !(rr > 0.0) || !H.allFinite()) return 0.0;
@@ -174,6 +201,11 @@ Tracker::Tracker(cl::Context& ctx, const TrackOptions& options, int width, int h
   if (options_.final_reduction != "host" && options_.final_reduction != "device") {
     throw ConfigError("track.final_reduction must be host or device, got '" +
                       options_.final_reduction + "'");
+  }
+  if (options_.rotation_centre != "camera" && options_.rotation_centre != "stiffness" &&
+      options_.rotation_centre != "origin") {
+    throw ConfigError("track.rotation_centre must be camera, stiffness or origin, got '" +
+                      options_.rotation_centre + "'");
   }
   const std::string defs =
       "-DTRACK_LX=" + std::to_string(kLocalX) + " -DTRACK_LY=" + std::to_string(kLocalY);
@@ -270,8 +302,18 @@ Tracker::LevelResult Tracker::runLevel(const map::VolumeDeviceView& volume, cl_m
   // cost reduction of a step is measured over the pixels valid at both poses.
   LevelResult res;
   const double eps = options_.lm_eps;
-  Matrix6d H = at_T->H * inv_max_weight;
-  Vector6d g = at_T->g * inv_max_weight;
+  // The volume's left increments rotate about the volume origin, which can lie metres from
+  // the points (a 5 m background seen from one face): rotation and translation then couple
+  // strongly, and the damping and step sizes depend on where the origin happens to be (a 7.7 m
+  // background lost most of redkitchen as degenerate). LM runs on increments h' about the
+  // centre chosen by track.rotation_centre at the start of the level instead (H' = M H M^T,
+  // g' = M g, volume increment h = M^T h'); step sizes below are those of h'.
+  const Matrix6d M = options_.rotation_centre == "origin" ? Matrix6d::Identity()
+                     : options_.rotation_centre == "stiffness"
+                         ? centringMap(stiffnessCentre(at_T->H))
+                         : centringMap(T->translation());
+  Matrix6d H = M * at_T->H * M.transpose() * inv_max_weight;
+  Vector6d g = M * at_T->g * inv_max_weight;
   double mu = tau * H.diagonal().maxCoeff();
   double nu = options_.lm_nu;
   res.final_damping = tau;
@@ -294,7 +336,7 @@ Tracker::LevelResult Tracker::runLevel(const map::VolumeDeviceView& volume, cl_m
       break;
     }
     const Vector6d h = scale * h_lm;
-    const Eigen::Isometry3d T_new = applyLeftIncrement(h, *T);
+    const Eigen::Isometry3d T_new = applyLeftIncrement(M.transpose() * h, *T);
     const NormalEquations ne = evaluateCandidate(volume, vertex_map, q, T_new, stride, true);
     ++res.iterations;
     const double actual = -ne.cost_change * inv_max_weight;
@@ -306,8 +348,8 @@ Tracker::LevelResult Tracker::runLevel(const map::VolumeDeviceView& volume, cl_m
       *T = T_new;
       *at_T = ne;
       current_ = 1 - current_;
-      H = ne.H * inv_max_weight;
-      g = ne.g * inv_max_weight;
+      H = M * ne.H * M.transpose() * inv_max_weight;
+      g = M * ne.g * inv_max_weight;
       const double c = 2.0 * gain - 1.0;
       mu *= std::max(1.0 / 3.0, 1.0 - c * c * c);
       nu = options_.lm_nu;

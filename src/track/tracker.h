@@ -174,8 +174,17 @@ class Tracker {
   std::map<cl_mem, double> typical_inliers_;  // running inlier ratio of each volume's tracked calls
 };
 
-/// Inverse condition number of H after balancing: the rotation block is scaled so that its
-/// trace equals the translation block's (removes the metres-vs-radians unit choice).
+/// Centre c about which rotations decouple best from translations for the information H of
+/// left increments about the origin (least-squares zero of the coupling block of M H M^T,
+/// M = centringMap(c)); for constraints spread evenly over the points, their centroid.
+Eigen::Vector3d stiffnessCentre(const Matrix6d& H);
+/// M = [[I, 0], [-[c]x, I]]: maps increments about the origin to increments about c
+/// (J' = M J, H' = M H M^T, g' = M g; back: h = M^T h').
+Matrix6d centringMap(const Eigen::Vector3d& c);
+
+/// Inverse condition number of H after moving the rotation centre to stiffnessCentre(H) and
+/// balancing: the rotation block is scaled so that its trace equals the translation block's.
+/// Neither where the volume's origin lies nor the metres-vs-radians unit choice changes it.
 double balancedInverseCondition(const Matrix6d& H);
 
 }  // namespace emf::track
