@@ -45,6 +45,11 @@ struct ObjectOptions {
   int invisible_min_px = 1600;
   int visibility_border_px = 20;
   double min_mean_association = 0.1;
+  /// Objects whose tracking failed on more than this many frames in a row (with the camera
+  /// tracked) are deleted: their pose is stale, and tracking from it re-acquires the object at
+  /// a wrong place (cars preset: car 2 lost near frame 90, "found" 2 m off). A detection
+  /// re-creates it where it is. 0 = never (the paper has no such rule).
+  int max_lost_frames = 15;
   int max_objects = 8;
   bool free_space_full_weight = false;
   bool filter_depth = false;
@@ -73,6 +78,8 @@ struct ObjectOptions {
               "image border ignored by the visibility test (at 640x480)");
     b.real("min_mean_association", min_mean_association, 0.0, 1.0, "",
            "objects whose mean association over their mask is below this are deleted");
+    b.integer("max_lost_frames", max_lost_frames, 0, 100000, "frames",
+              "objects whose tracking failed on more frames in a row are deleted (0 = never)");
     b.boolean("free_space_full_weight", free_space_full_weight,
               "object volumes integrate free space with weight 1 whatever q (the authors' "
               "rule; off: weighted by q, which keeps other surfaces from eroding the object)");

@@ -171,6 +171,10 @@ double meanAssociation(const cv::Mat& q, const cv::Mat& object_ids, int object_i
   return cv::sum(q.mul(weights))[0] / n;
 }
 
+bool lostTooLong(int consecutive_lost_frames, const ObjectOptions& options) {
+  return options.max_lost_frames > 0 && consecutive_lost_frames > options.max_lost_frames;
+}
+
 GrowPlan planGrowth(const std::vector<Eigen::Vector3d>& points_volume,
                     const Eigen::Vector3i& dims_blocks, double voxel_size_m, int block_voxels,
                     int max_blocks_per_side) {

@@ -83,6 +83,10 @@ bool isInvisible(const cv::Mat& object_ids, int object_id, const ObjectOptions& 
 /// objects.min_mean_association. Returns 0 for an empty mask.
 double meanAssociation(const cv::Mat& q, const cv::Mat& object_ids, int object_id);
 
+/// Objects whose tracking failed on more than objects.max_lost_frames frames in a row are
+/// deleted (not in the paper: a stale pose re-acquires the object at a wrong place).
+bool lostTooLong(int consecutive_lost_frames, const ObjectOptions& options);
+
 /// Step 5, growing: whole blocks (block_voxels per block) to add on the low and high side of
 /// each axis so that every point (volume frame, metres; volume spans [0, dims*block*voxel]) lies
 /// inside. Growth per side is capped at `max_blocks_per_side`.

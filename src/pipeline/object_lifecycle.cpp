@@ -88,11 +88,13 @@ void SlamSystem::trackObjects(const std::vector<Eigen::Isometry3d>& T_oc_predict
       // Keep the object where it was in the world (its pose relative to the camera follows
       // the camera); not integrated this frame.
       o.state = ObjectState::kLost;
+      ++o.lost_frames;
       o.last_motion = last_motion_;
       logDebug("frame ", frames_, ": object ", o.id, " not tracked: ", r.loss_reason);
       continue;
     }
     o.state = ObjectState::kTracked;
+    o.lost_frames = 0;
     o.last_frame = frames_;
     o.last_motion = T_oc_before.inverse() * r.T_volume_camera;
     o.volume->setPose(T_world_camera_ * r.T_volume_camera.inverse());
@@ -308,6 +310,12 @@ void SlamSystem::checkVisibility() {
   for (size_t k = objects_.size(); k-- > 0;) {
     const TrackedObject& o = objects_[k];
     if (o.first_frame == frames_) continue;  // created this frame
+    if (em::lostTooLong(o.lost_frames, opt)) {
+      deleteObject(k, "lost: not tracked on " + std::to_string(o.lost_frames) +
+                          " frames in a row (> objects.max_lost_frames " +
+                          std::to_string(opt.max_lost_frames) + "), its pose is stale");
+      continue;
+    }
     const int visible = em::visiblePixels(last_ids_, o.id, opt);
     if (visible < opt.invisible_min_px) {
       deleteObject(k, "invisible: " + std::to_string(visible) + " px < " +

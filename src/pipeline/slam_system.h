@@ -89,6 +89,7 @@ struct TrackedObject {
   em::Existence existence;
   int64_t first_frame = 0, last_frame = 0;
   ObjectState state = ObjectState::kTracked;
+  int lost_frames = 0;  // consecutive frames its tracking failed (with the camera tracked)
   int e_step_slot = 0;  // index of this object in the current E-step (1..)
 };
 

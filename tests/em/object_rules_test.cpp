@@ -171,6 +171,16 @@ TEST(ObjectRules, MeanAssociationOverMask) {
   EXPECT_EQ(meanAssociation(q, ids, 4), 0.0);
 }
 
+TEST(ObjectRules, LostTooLongAfterMaxLostFrames) {
+  ObjectOptions o;
+  o.max_lost_frames = 15;
+  EXPECT_FALSE(lostTooLong(0, o));
+  EXPECT_FALSE(lostTooLong(15, o));  // "more than" 15 frames
+  EXPECT_TRUE(lostTooLong(16, o));
+  o.max_lost_frames = 0;  // off
+  EXPECT_FALSE(lostTooLong(100000, o));
+}
+
 TEST(ObjectRules, GrowthInWholeBlocks) {
   // 8 x 8 x 8 blocks of 8 voxels of 1 cm: the volume spans [0, 0.64) m per axis.
   const Eigen::Vector3i dims(8, 8, 8);
