@@ -55,10 +55,12 @@ struct TrackOptions {
   /// camera-frame parametrisation), "stiffness" (stiffnessCentre of the Hessian: about the
   /// centroid of the constraining points) or "origin" (the volume's origin, the left increments
   /// as such). Only the LM path and step sizes change, not the minimum: a far origin couples
-  /// rotation and translation (a 7.68 m background lost 230 of redkitchen's 300 frames and
-  /// LM needed 1.6x the iterations). bench/slam_bench, redkitchen 300 frames at 640x480:
-  /// track 17.8 ms (origin) -> 11.0 ms (camera or stiffness), ATE 2.254 -> 2.252 cm. Objects
-  /// use "stiffness" (pipeline::objectTrackOptions): the camera is metres from a small object.
+  /// rotation and translation (a 7.68 m background lost 230 of redkitchen's 300 frames).
+  /// Redkitchen 300 frames at 640x480, back to back on a busy machine: track 30.7 / 20.5 /
+  /// 14.0 ms, ATE 2.254 / 2.250 / 2.252 cm (origin / camera / stiffness); synthetic room 0.527
+  /// / 0.528 / 0.504 cm. "stiffness" is not the camera default: on tum-fr3-cabinet-keyframes
+  /// it stops converging at keyframe 5 and re-acquires a wrong pose at keyframe 15 that passes
+  /// every loss rule. Objects use "stiffness" (pipeline::objectTrackOptions).
   std::string rotation_centre = "camera";
 
   // Tracking loss: a frame is lost when any rule fires (evaluated at the final pose, finest
