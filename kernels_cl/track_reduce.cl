@@ -16,10 +16,12 @@
 // TRACK_TERMS partials:
 //   [0, 21)  upper triangle of H = sum c h J J^T (row-major: 00 01 .. 05 11 12 .. 55)
 //   [21, 27) g = sum c h J r
-//   27 cost = sum c rho(r)      28 valid samples      29 inliers (|r| <= delta)
+//   27 cost = sum c rho(r)      28 valid samples
+//   29 inliers: |r| <= max(delta, inlier_noise * z^2), z the pixel's camera-frame depth (the
+//      loss rule's count; the cost keeps delta)
 //   30 input pixels (valid vertex and q > 0)          31 max W over valid samples (a max)
 //   32 sum over pixels valid now and in `prev_cost` of (c rho(r) - prev_cost)
-//   33 number of those pixels
+//   33 number of those pixels                         34 strict inliers (|r| <= delta)
 // Every sampled pixel's own cost c rho(r) (NaN when not valid) is written to pixel_cost, so
 // that the next evaluation can compare costs over the pixels valid at both poses (points
 // entering or leaving the observed map would otherwise make E jump between poses).
@@ -27,7 +29,7 @@
 #include "common.clh"
 #include "voxel_access.clh"
 
-#define TRACK_TERMS 34
+#define TRACK_TERMS 35
 #define TRACK_MAX_TERM 31
 // Work-group shape in work items; each item handles 16 consecutive sampled columns of a row.
 #ifndef TRACK_LX
@@ -67,8 +69,8 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
     __global const float4* vertex, __global const float* q, const int width, const int height,
     const int stride, const float4 r0, const float4 r1, const float4 r2, __global const int* index,
     const int4 dims, __global const short2* voxels, const float voxel_size, const float truncation,
-    const float huber_delta, __global const float* prev_cost, __global float* pixel_cost,
-    const int compare, __global float* partials) {
+    const float huber_delta, const float inlier_noise, __global const float* prev_cost,
+    __global float* pixel_cost, const int compare, __global float* partials) {
   // Term t of item k: shared[t * TRACK_ITEMS + k], 16 lanes (pixels) each.
   __local float16 shared[TRACK_TERMS * TRACK_ITEMS];
   const int lid = get_local_id(0) + TRACK_LX * get_local_id(1);
@@ -151,11 +153,12 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
   TRACK_PUT(26, w5 * r);
   TRACK_PUT(27, cost);
   TRACK_PUT(28, valid ? 1.0f : 0.0f);
-  TRACK_PUT(29, (valid & inlier) ? 1.0f : 0.0f);
+  TRACK_PUT(29, (valid & (abs_r <= fmax(huber_delta, inlier_noise * pz * pz))) ? 1.0f : 0.0f);
   TRACK_PUT(30, input ? 1.0f : 0.0f);
   TRACK_PUT(31, valid ? weight : 0.0f);  // TRACK_MAX_TERM
   TRACK_PUT(32, common ? cost - prev : 0.0f);
   TRACK_PUT(33, common ? 1.0f : 0.0f);
+  TRACK_PUT(34, (valid & inlier) ? 1.0f : 0.0f);
 #undef TRACK_PUT
   barrier(CLK_LOCAL_MEM_FENCE);
   // Work item k adds up terms k, k + 16 and k + 32 (written out, no loops: see above).

@@ -13,7 +13,7 @@ namespace emf::track {
 namespace {
 
 // Must match kernels_cl/track_reduce.cl.
-constexpr int kTerms = 34;
+constexpr int kTerms = 35;
 // Work-group shape of track_accumulate (2D over the sampled grid, each work item takes 16
 // consecutive sampled columns of one row): 2 x 8 items = 32 sampled columns x 8 rows.
 constexpr int kLanes = 16;
@@ -39,6 +39,7 @@ enum Term : int {
   kMaxWeight = 31,
   kCostChange = 32,
   kCommon = 33,
+  kStrictInliers = 34,
 };
 
 void unpackTerms(const double* t, NormalEquations* ne) {
@@ -58,6 +59,7 @@ void unpackTerms(const double* t, NormalEquations* ne) {
   ne->max_weight = t[kMaxWeight];
   ne->cost_change = t[kCostChange];
   ne->common = static_cast<int>(std::lround(t[kCommon]));
+  ne->strict_inliers = static_cast<int>(std::lround(t[kStrictInliers]));
 }
 
 void checkVolume(const map::VolumeDeviceView& v) {
@@ -96,7 +98,8 @@ const char* trackLossName(TrackLoss loss) {
 NormalEquations accumulateReference(const map::VolumeHostView& volume, const cv::Mat& vertex,
                                     const cv::Mat& q, int stride,
                                     const Eigen::Isometry3d& T_volume_camera, double huber_delta_m,
-                                    const cv::Mat* prev_cost, cv::Mat* pixel_cost) {
+                                    const cv::Mat* prev_cost, cv::Mat* pixel_cost,
+                                    double inlier_noise_per_m2) {
   if (vertex.type() != CV_32FC4 || (!q.empty() && (q.type() != CV_32F || q.size != vertex.size))) {
     throw InvalidArgument(
         "accumulateReference: vertex must be CV_32FC4 and q empty or CV_32F of the same size");
@@ -126,7 +129,11 @@ NormalEquations accumulateReference(const map::VolumeHostView& volume, const cv:
       const double r = psi, abs_r = std::abs(r);
       const bool inlier = abs_r <= delta;
       const double c = static_cast<double>(qu) * weight;
-      t[kInliers] += inlier ? 1.0 : 0.0;
+      const float inlier_radius =
+          std::max(static_cast<float>(delta),
+                   static_cast<float>(inlier_noise_per_m2) * p[2] * p[2]);  // as the kernel
+      t[kInliers] += abs_r <= inlier_radius ? 1.0 : 0.0;
+      t[kStrictInliers] += inlier ? 1.0 : 0.0;
       const double cost = c * (inlier ? 0.5 * r * r : delta * (abs_r - 0.5 * delta));
       t[kCost] += cost;
       if (pixel_cost) pixel_cost->at<float>(v, u) = static_cast<float>(cost);
@@ -266,8 +273,8 @@ NormalEquations Tracker::evaluateCandidate(const map::VolumeDeviceView& volume, 
   const float delta = static_cast<float>(options_.huber_truncation_factor * volume.truncation_m);
   cl::setArgs(accumulate_, vertex_map, q ? q : ones_.get(), width_, height_, stride, rows[0],
               rows[1], rows[2], volume.index, dims, volume.voxels, volume.voxel_size_m,
-              volume.truncation_m, delta, costs_[current_].get(), costs_[1 - current_].get(),
-              compare ? 1 : 0, partials_.get());
+              volume.truncation_m, delta, static_cast<cl_float>(options_.inlier_noise_per_m2),
+              costs_[current_].get(), costs_[1 - current_].get(), compare ? 1 : 0, partials_.get());
   const int sw = (width_ + stride - 1) / stride;
   const int sh = (height_ + stride - 1) / stride;
   cl::enqueue(ctx_.queue(), accumulate_, static_cast<size_t>((sw + kLanes - 1) / kLanes),
@@ -414,6 +421,8 @@ TrackResult Tracker::track(const map::VolumeDeviceView& volume, cl_mem vertex_ma
   result.cost_per_valid = ne.valid > 0 ? result.cost / ne.valid : 0.0;
   result.valid_fraction = ne.input > 0 ? static_cast<double>(ne.valid) / ne.input : 0.0;
   result.inlier_ratio = ne.valid > 0 ? static_cast<double>(ne.inliers) / ne.valid : 0.0;
+  result.strict_inlier_ratio =
+      ne.valid > 0 ? static_cast<double>(ne.strict_inliers) / ne.valid : 0.0;
   result.inverse_condition = balancedInverseCondition(ne.H);
   const Eigen::Isometry3d motion = T_volume_camera_init.inverse() * T;
   result.motion_m = motion.translation().norm();
@@ -437,12 +446,13 @@ TrackResult Tracker::track(const map::VolumeDeviceView& volume, cl_mem vertex_ma
   } else if (result.inlier_ratio < options_.min_inlier_ratio) {
     result.loss = TrackLoss::kFewInliers;
     why << "inlier ratio " << result.inlier_ratio << " (" << ne.inliers << " of " << ne.valid
-        << " points within the Huber delta) is below track.min_inlier_ratio "
+        << " points within the inlier radius) is below track.min_inlier_ratio "
         << options_.min_inlier_ratio;
-  } else if (recovering(volume.index) && result.inlier_ratio < recoveryInlierRatio(volume.index)) {
+  } else if (recovering(volume.index) &&
+             result.strict_inlier_ratio < recoveryInlierRatio(volume.index)) {
     result.loss = TrackLoss::kFewInliers;
-    why << "recovering after a lost frame: inlier ratio " << result.inlier_ratio << " ("
-        << ne.inliers << " of " << ne.valid << " points within the Huber delta) is below "
+    why << "recovering after a lost frame: inlier ratio " << result.strict_inlier_ratio << " ("
+        << ne.strict_inliers << " of " << ne.valid << " points within the Huber delta) is below "
         << recoveryInlierRatio(volume.index) << " (track.recovery_min_inlier_ratio "
         << options_.recovery_min_inlier_ratio << ", at most the volume's typical inlier ratio - "
         << kRecoveryMargin << ")";
@@ -459,12 +469,12 @@ TrackResult Tracker::track(const map::VolumeDeviceView& volume, cl_mem vertex_ma
   result.lost = result.loss != TrackLoss::kNone;
   result.loss_reason = why.str();
   if (!result.lost) {
-    // Running typical inlier ratio of the volume's tracked calls.
+    // Running typical (strict) inlier ratio of the volume's tracked calls.
     const auto t = typical_inliers_.find(volume.index);
     if (t == typical_inliers_.end()) {
-      typical_inliers_[volume.index] = result.inlier_ratio;
+      typical_inliers_[volume.index] = result.strict_inlier_ratio;
     } else {
-      t->second += kTypicalRate * (result.inlier_ratio - t->second);
+      t->second += kTypicalRate * (result.strict_inlier_ratio - t->second);
     }
   }
   const auto it = std::find(lost_volumes_.begin(), lost_volumes_.end(), volume.index);

@@ -25,7 +25,12 @@
 //   valid / input < min_valid_fraction                 -> kFewValidPoints
 //   |T_init^-1 T| > max_motion_m or max_motion_deg     -> kLargeMotion
 //   inliers / valid < min_inlier_ratio                 -> kFewInliers
-//   recovering and inliers / valid < recovery_min_inlier_ratio -> kFewInliers
+//     (inlier: |r| <= max(Huber delta, inlier_noise_per_m2 z^2), the depth noise allowed for)
+//   recovering and strict_inliers / valid < min(recovery_min_inlier_ratio, typical - 0.05)
+//                                                      -> kFewInliers
+//     (strict: |r| <= Huber delta; typical: running mean of the volume's tracked calls. There
+//     is no relocalisation, so a re-acquired pose must fit at the Huber delta: the wider
+//     radius let a pose 1.9 m / 89 deg off pass on tum-fr3-cabinet-keyframes)
 //   balancedInverseCondition(H) < min_inverse_condition -> kDegenerate
 //   finest level ended at max_iterations (lost_if_not_converged) -> kNotConverged
 // A lost result still carries the estimate; the caller keeps its last good pose and does not
@@ -55,7 +60,7 @@ struct NormalEquations {
   Vector6d g = Vector6d::Zero();  // sum c h J r   (metres)
   double cost = 0.0;              // sum c rho(r)  (metres^2)
   int valid = 0;                  // pixels whose point landed on observed map
-  int inliers = 0;                // of those, |r| <= delta
+  int inliers = 0;                // of those, |r| <= max(delta, inlier_noise_per_m2 z^2)
   int input = 0;                  // pixels with a valid vertex and q > 0
   double max_weight = 0.0;        // max W over the valid samples
   /// Compared with an earlier evaluation (per-pixel costs): sum over the pixels valid at both
@@ -63,18 +68,22 @@ struct NormalEquations {
   /// that points entering or leaving the observed map do not make E jump.
   double cost_change = 0.0;
   int common = 0;
+  int strict_inliers = 0;  // valid samples with |r| <= delta (the recovery rule's count)
 };
 
 /// CPU reference of the track_accumulate kernel (and its reduction), in double. `vertex`:
 /// CV_32FC4 camera-frame points (w = 0 invalid); `q`: CV_32F weights or empty (= ones). Only
 /// pixels (u, v) with u % stride == 0 and v % stride == 0 are used. `prev_cost` (CV_32F, NaN
 /// where invalid; optional) gives cost_change/common; `pixel_cost` (optional) receives each
-/// used pixel's cost c rho(r) (NaN where not valid; other pixels untouched).
+/// used pixel's cost c rho(r) (NaN where not valid; other pixels untouched). A point counts as
+/// an inlier when |r| <= max(huber_delta_m, inlier_noise_per_m2 * z^2), z its camera-frame depth
+/// (TrackOptions::inlier_noise_per_m2).
 NormalEquations accumulateReference(const map::VolumeHostView& volume, const cv::Mat& vertex,
                                     const cv::Mat& q, int stride,
                                     const Eigen::Isometry3d& T_volume_camera, double huber_delta_m,
                                     const cv::Mat* prev_cost = nullptr,
-                                    cv::Mat* pixel_cost = nullptr);
+                                    cv::Mat* pixel_cost = nullptr,
+                                    double inlier_noise_per_m2 = 0.0);
 
 /// Why a frame was declared lost (TrackResult::loss).
 enum class TrackLoss {
@@ -91,17 +100,18 @@ const char* trackLossName(TrackLoss loss);
 struct TrackResult {
   /// Final estimate (also returned when lost: the caller keeps its last good pose).
   Eigen::Isometry3d T_volume_camera = Eigen::Isometry3d::Identity();
-  int iterations = 0;            // LM iterations over all levels (one device evaluation each)
-  bool converged = false;        // stopped by lm_eps / early_exit_step, not by max_iterations
-  double cost = 0.0;             // final E (metres^2, confidence normalised by max W)
-  double cost_per_valid = 0;     // cost / valid_pixels
-  int valid_pixels = 0;          // finest level: pixels landing on observed map
-  int input_pixels = 0;          // finest level: pixels with valid depth and q > 0
-  double valid_fraction = 0;     // valid_pixels / input_pixels
-  double inlier_ratio = 0;       // inliers / valid_pixels
-  double inverse_condition = 0;  // lambda_min / lambda_max of the balanced Hessian
-  double motion_m = 0;           // |translation| of T_init^-1 T_final (camera frame), metres
-  double motion_deg = 0;         // rotation angle of T_init^-1 T_final, degrees
+  int iterations = 0;              // LM iterations over all levels (one device evaluation each)
+  bool converged = false;          // stopped by lm_eps / early_exit_step, not by max_iterations
+  double cost = 0.0;               // final E (metres^2, confidence normalised by max W)
+  double cost_per_valid = 0;       // cost / valid_pixels
+  int valid_pixels = 0;            // finest level: pixels landing on observed map
+  int input_pixels = 0;            // finest level: pixels with valid depth and q > 0
+  double valid_fraction = 0;       // valid_pixels / input_pixels
+  double inlier_ratio = 0;         // inliers / valid_pixels (depth-dependent inlier radius)
+  double strict_inlier_ratio = 0;  // strict_inliers / valid_pixels (|r| <= Huber delta)
+  double inverse_condition = 0;    // lambda_min / lambda_max of the balanced Hessian
+  double motion_m = 0;             // |translation| of T_init^-1 T_final (camera frame), metres
+  double motion_deg = 0;           // rotation angle of T_init^-1 T_final, degrees
   bool lost = false;
   TrackLoss loss = TrackLoss::kNone;
   std::string loss_reason;  // human-readable, names the rule and the numbers; empty if ok

@@ -9,6 +9,7 @@
 #include <random>
 
 #include "common/error.h"
+#include "io/synth/depth_noise.h"
 #include "test_support.h"
 #include "track/preprocess.h"
 #include "track_test_support.h"
@@ -96,6 +97,7 @@ void expectNormalEquationsNear(const NormalEquations& dev, const NormalEquations
   EXPECT_NEAR(dev.input, ref.input, 0);
   EXPECT_NEAR(dev.valid, ref.valid, kCountTolerance);
   EXPECT_NEAR(dev.inliers, ref.inliers, kCountTolerance);
+  EXPECT_NEAR(dev.strict_inliers, ref.strict_inliers, kCountTolerance);
   EXPECT_NEAR(dev.max_weight, ref.max_weight, 1e-6 * ref.max_weight);
   const double h_scale = ref.H.cwiseAbs().maxCoeff();
   const double g_scale = ref.g.cwiseAbs().maxCoeff();
@@ -147,15 +149,32 @@ TEST_F(TrackerTest, AccumulationMatchesReferenceSynthetic) {
   // A pose 3 cm / 3 degrees off: inliers and Huber outliers.
   const Eigen::Isometry3d T = perturb(room_->T_volume_camera_gt, rng, 0.03, 3 * kDeg);
   const double delta = 0.2 * room_->host->truncation_m;
+  const double noise = TrackOptions{}.inlier_noise_per_m2;
   // References computed once (they are slow in unoptimised sanitizer builds).
-  const NormalEquations ref_s1 =
-      accumulateReference(room_->host->view(), frame.vertex, q, 1, T, delta);
-  const NormalEquations ref_s3 =
-      accumulateReference(room_->host->view(), frame.vertex, q, 3, T, delta);
-  const NormalEquations ref_ones =
-      accumulateReference(room_->host->view(), frame.vertex, cv::Mat(), 2, T, delta);
+  const NormalEquations ref_s1 = accumulateReference(room_->host->view(), frame.vertex, q, 1, T,
+                                                     delta, nullptr, nullptr, noise);
+  const NormalEquations ref_s3 = accumulateReference(room_->host->view(), frame.vertex, q, 3, T,
+                                                     delta, nullptr, nullptr, noise);
+  const NormalEquations ref_ones = accumulateReference(room_->host->view(), frame.vertex, cv::Mat(),
+                                                       2, T, delta, nullptr, nullptr, noise);
   EXPECT_GT(ref_s1.inliers, ref_s1.valid / 4);
   EXPECT_LT(ref_s1.inliers, ref_s1.valid);
+  {
+    // A depth-dependent inlier radius well above delta in this room (0.05 z^2 >= 5 cm beyond
+    // 1 m): more inliers, the same cost terms, and the kernel counts them like the reference.
+    const double wide = 0.05;
+    const NormalEquations ref_wide = accumulateReference(room_->host->view(), frame.vertex, q, 3, T,
+                                                         delta, nullptr, nullptr, wide);
+    EXPECT_GT(ref_wide.inliers, ref_s3.inliers + ref_s3.valid / 20);
+    EXPECT_EQ(ref_wide.strict_inliers, ref_s3.strict_inliers);
+    EXPECT_LE(ref_s3.strict_inliers, ref_s3.inliers);
+    EXPECT_DOUBLE_EQ(ref_wide.cost, ref_s3.cost);
+    TrackOptions o;
+    o.inlier_noise_per_m2 = wide;
+    Tracker tracker(ctx(), o, k.width, k.height);
+    expectNormalEquationsNear(tracker.evaluate(room_->device.view, vertex.get(), qbuf.get(), T, 3),
+                              ref_wide);
+  }
   for (const std::string reduction : {"host", "device"}) {
     TrackOptions o;
     o.final_reduction = reduction;
@@ -476,7 +495,7 @@ TEST_F(TrackerTest, AfterALostFrameTheRecoveryInlierRatioApplies) {
   const TrackResult ok = fresh.track(room_->device.view, pre.vertexMap().get(), nullptr, init);
   ASSERT_FALSE(ok.lost) << ok.loss_reason;
   ASSERT_GT(ok.inlier_ratio, o.min_inlier_ratio);
-  ASSERT_LT(ok.inlier_ratio, o.recovery_min_inlier_ratio);
+  ASSERT_LT(ok.strict_inlier_ratio, o.recovery_min_inlier_ratio);
   EXPECT_FALSE(fresh.recovering(index));
 
   Tracker t(ctx(), o, room_->intrinsics.width, room_->intrinsics.height);
@@ -485,7 +504,7 @@ TEST_F(TrackerTest, AfterALostFrameTheRecoveryInlierRatioApplies) {
   const TrackResult r = t.track(room_->device.view, pre.vertexMap().get(), nullptr, init);
   EXPECT_TRUE(r.lost);
   EXPECT_EQ(r.loss, TrackLoss::kFewInliers);
-  EXPECT_NEAR(r.inlier_ratio, ok.inlier_ratio, 1e-9);  // same computation, other verdict
+  EXPECT_NEAR(r.strict_inlier_ratio, ok.strict_inlier_ratio, 1e-9);  // same figures, other verdict
   EXPECT_NE(r.loss_reason.find("track.recovery_min_inlier_ratio"), std::string::npos)
       << r.loss_reason;
   // A frame tracked well ends the recovery.
@@ -495,8 +514,51 @@ TEST_F(TrackerTest, AfterALostFrameTheRecoveryInlierRatioApplies) {
   const TrackResult good =
       t2.track(room_->device.view, pre.vertexMap().get(), nullptr, room_->T_volume_camera_gt);
   EXPECT_FALSE(good.lost) << good.loss_reason;
-  EXPECT_GE(good.inlier_ratio, o.recovery_min_inlier_ratio);
+  EXPECT_GE(good.strict_inlier_ratio, o.recovery_min_inlier_ratio);
   EXPECT_FALSE(t2.recovering(index));
+}
+
+TEST_F(TrackerTest, FarNoisyDepthAtTheRightPoseIsNotLost) {
+  // The room pushed 2 m back (depths ~4-6 m) seen twice from the same pose through the
+  // Kinect-v1 noise model (independent noise), the first view fused alone into a 1 cm volume (a
+  // thin map, as after the first frame of a run). At the true pose many residuals exceed the 2 cm
+  // Huber delta but not the depth-dependent inlier radius: the loss rule must not call this frame
+  // lost (with the fixed delta alone it did: the occlusion preset at 640x480 lost 29 of 30 frames).
+  constexpr double kBackM = 2.0;
+  // Pose error allowed with this noise (sigma 3-5 cm per pixel), and the difference between the
+  // strict ratios of two trackers that stop at slightly different poses.
+  constexpr double kNoisyPoseToleranceM = 0.01;
+  constexpr double kRatioTolerance = 0.02;
+  const io::Intrinsics& k = room_->intrinsics;
+  Eigen::Isometry3d back = Eigen::Isometry3d::Identity();
+  back.translation() = Eigen::Vector3d(0.0, 0.0, -kBackM);
+  const cv::Mat exact = room_->scene.render(k, room_->T_volume_camera_gt * back);
+  io::synth::DepthNoiseOptions noise;
+  noise.max_range_m = 6.0;
+  const io::synth::DepthNoiseModel noise_model(noise);
+  cv::Mat first, second;
+  noise_model.apply(exact, cv::Mat(), k.fx, 7, 0, &first);
+  noise_model.apply(exact, cv::Mat(), k.fx, 7, 1, &second);
+  test::HostVolume host(Eigen::Vector3i(64, 64, 64), 0.01f, 0.1f);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() << 2.56, 2.56, 0.0;
+  test::fuseDepth(&host, first, k, T, 64.0f);
+  const test::DeviceVolume device = test::upload(ctx(), host);
+  Preprocessor pre(ctx(), PreprocessOptions{}, k);
+  pre.process(second);
+  TrackOptions o;
+  Tracker tracker(ctx(), o, k.width, k.height);
+  const TrackResult r = tracker.track(device.view, pre.vertexMap().get(), nullptr, T);
+  EXPECT_FALSE(r.lost) << r.loss_reason;
+  EXPECT_GE(r.inlier_ratio, o.min_inlier_ratio);
+  EXPECT_LT(r.strict_inlier_ratio, o.min_inlier_ratio) << "the case must need the wider radius";
+  EXPECT_LT(translationError(r.T_volume_camera, T), kNoisyPoseToleranceM);
+  o.inlier_noise_per_m2 = 0.0;
+  Tracker fixed_delta(ctx(), o, k.width, k.height);
+  const TrackResult f = fixed_delta.track(device.view, pre.vertexMap().get(), nullptr, T);
+  EXPECT_TRUE(f.lost);
+  EXPECT_EQ(f.loss, TrackLoss::kFewInliers);
+  EXPECT_NEAR(f.inlier_ratio, r.strict_inlier_ratio, kRatioTolerance);
 }
 
 TEST_F(TrackerTest, EmptyFrameIsLostWithoutDepth) {
@@ -636,8 +698,9 @@ TEST_F(TrackerTest, RealPairAccumulationMatchesReference) {
   Tracker tracker(ctx(), TrackOptions{}, 640, 480);
   // Every 2nd pixel (the synthetic test covers stride 1) keeps the reference short in
   // unoptimised sanitizer builds.
-  const NormalEquations ref = accumulateReference(p.host->view(), frame.vertex, cv::Mat(), 2,
-                                                  p.T_volume_prev, 0.2 * p.host->truncation_m);
+  const NormalEquations ref = accumulateReference(
+      p.host->view(), frame.vertex, cv::Mat(), 2, p.T_volume_prev, 0.2 * p.host->truncation_m,
+      nullptr, nullptr, TrackOptions{}.inlier_noise_per_m2);
   expectNormalEquationsNear(
       tracker.evaluate(p.device.view, vertex.get(), nullptr, p.T_volume_prev, 2), ref);
 }
