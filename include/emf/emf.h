@@ -123,7 +123,8 @@ typedef struct emf_object_info {
   int32_t id;               /**< stable id (> 0); the background is volume 0 */
   char class_name[64];      /**< detector class, e.g. "car" (NUL-terminated, truncated) */
   emf_object_state state;   /**< in the frame of the result */
-  emf_pose T_world_object;  /**< object volume frame in the world */
+  emf_pose T_world_object;  /**< object frame in the world (its volume frame at creation; stays
+                                 on the object when the volume grows) */
   emf_pose T_object_camera; /**< camera in the object's frame (how objects are evaluated) */
   double existence;         /**< Ex / (Ex + NonEx), in [0, 1] */
   int64_t first_frame;      /**< first frame (frame_index) the object was tracked */

@@ -270,6 +270,7 @@ void Volume::grow(const Eigen::Vector3i& add_low_blocks, const Eigen::Vector3i& 
   shift.translation() = -add_low_blocks.cast<double>() *
                         (static_cast<double>(kBlockSize) * static_cast<double>(spec_.voxel_size_m));
   T_world_volume_ = T_world_volume_ * shift;
+  T_volume_initial_ = shift.inverse() * T_volume_initial_;
   last_report_.listed_blocks = 0;  // the block list was for the old grid: allocate() again
 }
 
@@ -279,6 +280,7 @@ VolumeHostData Volume::download() const {
   out.voxel_size_m = spec_.voxel_size_m;
   out.truncation_m = spec_.truncation_m;
   out.T_world_volume = T_world_volume_;
+  out.T_volume_initial = T_volume_initial_;
   const size_t n = static_cast<size_t>(spec_.blockCount());
   std::vector<int32_t> index(n), count_index;
   ctx_.read(index_, index.data(), n * sizeof(int32_t));

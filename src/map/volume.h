@@ -83,6 +83,7 @@ struct VolumeHostData {
   float voxel_size_m = 0;
   float truncation_m = 0;
   Eigen::Isometry3d T_world_volume = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_volume_initial = Eigen::Isometry3d::Identity();  // see Volume
   std::vector<int32_t> index;        // compact slot per grid block, -1 = unallocated
   std::vector<int32_t> count_index;  // same for count blocks (empty without counts)
   std::vector<Voxel> voxels;         // compact slot s holds [s * kBlockVoxels, +kBlockVoxels)
@@ -108,6 +109,11 @@ class Volume {
   const VolumeSpec& spec() const { return spec_; }
   const Eigen::Isometry3d& T_world_volume() const { return T_world_volume_; }
   void setPose(const Eigen::Isometry3d& T_world_volume) { T_world_volume_ = T_world_volume; }
+  /// The volume frame at creation, in the current volume frame: grow() moves the grid origin
+  /// but not this frame, which stays fixed to the content (a translation by whole blocks).
+  /// Object poses and trajectories are reported in it, so that they do not jump on growth.
+  const Eigen::Isometry3d& T_volume_initial() const { return T_volume_initial_; }
+  Eigen::Isometry3d T_world_initial() const { return T_world_volume_ * T_volume_initial_; }
 
   /// Marks the blocks within +-truncation of the frame's depth and gives them slots (on the
   /// device); fills the block list integrate() uses. Exhaustion: see VoxelPool.
@@ -149,6 +155,7 @@ class Volume {
   cl::Context& ctx_;
   VolumeSpec spec_;
   Eigen::Isometry3d T_world_volume_;
+  Eigen::Isometry3d T_volume_initial_ = Eigen::Isometry3d::Identity();
   bool has_counts_buffer_ = false;
   cl::MemHandle index_, count_index_, needed_, block_list_, state_;
   cl::KernelHandle mark_, assign_, finalize_, integrate_, count_, release_, reindex_;

@@ -341,7 +341,7 @@ void SlamSystem::deleteObject(size_t i, const std::string& reason) {
   d.id = o.id;
   d.class_name = o.class_name;
   d.state = ObjectState::kDeleted;
-  d.T_world_object = o.volume->T_world_volume();
+  d.T_world_object = o.volume->T_world_initial();
   d.T_object_camera = d.T_world_object.inverse() * T_world_camera_;
   d.existence = o.existence.probability();
   d.first_frame = o.first_frame;
@@ -359,7 +359,7 @@ void SlamSystem::fillObjectOutcomes(FrameOutcome* out) const {
     r.id = o.id;
     r.class_name = o.class_name;
     r.state = o.state;
-    r.T_world_object = o.volume->T_world_volume();
+    r.T_world_object = o.volume->T_world_initial();
     r.T_object_camera = r.T_world_object.inverse() * T_world_camera_;
     r.existence = o.existence.probability();
     r.first_frame = o.first_frame;

@@ -151,8 +151,12 @@ void ObjectOutputs::add(const FrameOutcome& outcome) {
 void ObjectOutputs::writeMesh(int id, const map::VolumeHostData& volume) {
   ensureDir(dir_);
   map::MeshOptions options;
-  options.world_frame = false;  // the object's own frame; T_world_object places it
-  const map::Mesh mesh = map::extractMesh(volume, options);
+  options.world_frame = false;  // volume frame, then moved into the object's frame
+  map::Mesh mesh = map::extractMesh(volume, options);
+  // The object's frame is the volume frame at creation (a translation away after growth):
+  // the frame of object-<id>.txt, placed in the world by T_world_object.
+  const Eigen::Vector3f shift = volume.T_volume_initial.inverse().translation().cast<float>();
+  for (auto& v : mesh.vertices) v += shift;
   map::writePly(dir_ + "/" + meshName(id), mesh, binary_ply_);
   Track& t = tracks_[id];
   t.summary.id = id;

@@ -1,8 +1,9 @@
 // Per-object outputs of a run (issue 6 part 4), accumulated from the per-frame FrameOutcomes and
 // written atomically into the run folder:
 //   object-<id>.txt   TUM trajectory of T_object_camera (the camera's pose in the object's own
-//                     frame = its volume frame) at the frames where the object was tracked
-//   object-<id>.ply   the object's mesh in its own (volume) frame, metres: place it in the world
+//                     frame = its volume frame at creation, unchanged when the volume grows) at
+//                     the frames where the object was tracked
+//   object-<id>.ply   the object's mesh in that same frame, metres: place it in the world
 //                     with T_world_object of the frame of interest (run.json has the last one);
 //                     written when the object is deleted (onObjectDeleted) or at the end
 //   images/<frame>-objects.png   colour image with the rendered object ids overlaid (optional)
@@ -75,7 +76,8 @@ class ObjectOutputs {
   /// Writes object-<id>.ply from `volume` now: call before an object's volume is freed.
   /// Throws IoError when the file cannot be written.
   void onObjectDeleted(int id, const map::Volume& volume);
-  /// Writes object-<id>.ply from a host copy of the volume (vertices in the volume frame).
+  /// Writes object-<id>.ply from a host copy of the volume (vertices in the object's frame,
+  /// VolumeHostData::T_volume_initial).
   void writeMesh(int id, const map::VolumeHostData& volume);
 
   /// Writes images/<index>-objects.png (overlay of `object_ids`, CV_32S, on `color`) and one

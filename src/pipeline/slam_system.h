@@ -44,8 +44,10 @@ struct ObjectOutcome {
   int id = 0;  // stable, > 0 (the background is volume 0)
   std::string class_name;
   ObjectState state = ObjectState::kTracked;
-  Eigen::Isometry3d T_world_object = Eigen::Isometry3d::Identity();   // volume frame in world
-  Eigen::Isometry3d T_object_camera = Eigen::Isometry3d::Identity();  // camera in volume frame
+  /// The object's frame in the world: its volume frame at creation, which stays on the object
+  /// when the volume grows (map::Volume::T_world_initial), so trajectories do not jump.
+  Eigen::Isometry3d T_world_object = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_object_camera = Eigen::Isometry3d::Identity();  // camera in object frame
   double existence = 1.0;                                             // Ex / (Ex + NonEx)
   int64_t first_frame = 0, last_frame = 0;  // frames (SlamSystem indices) tracked
   bool rendered = true;                     // false for people (tracked, never rendered)
@@ -82,7 +84,7 @@ struct TrackedObject {
   int id = 0;
   std::string class_name;
   bool rendered = true;  // false for people (tracked so they leave the background, not shown)
-  std::unique_ptr<map::Volume> volume;  // its pose T_world_volume is the object's pose
+  std::unique_ptr<map::Volume> volume;  // object pose: volume->T_world_initial()
   /// Camera motion relative to the object over the last tracked frame, T_prev_curr (frame
   /// independent: unchanged when the volume grows). Predicts the next pose.
   Eigen::Isometry3d last_motion = Eigen::Isometry3d::Identity();

@@ -218,6 +218,16 @@ Tracker::Tracker(cl::Context& ctx, const TrackOptions& options, int width, int h
       "-DTRACK_LX=" + std::to_string(kLocalX) + " -DTRACK_LY=" + std::to_string(kLocalY);
   accumulate_ = ctx_.kernel("track_reduce", "track_accumulate", defs);
   reduce_ = ctx_.kernel("track_reduce", "track_reduce_partials", defs);
+  cl_ulong device_local = 0;
+  EMF_CL_CHECK(clGetDeviceInfo(ctx_.deviceId(), CL_DEVICE_LOCAL_MEM_SIZE, sizeof(device_local),
+                               &device_local, nullptr));
+  if (kernelLocalMemoryBytes() > device_local) {
+    std::ostringstream s;
+    s << "tracking: the accumulation kernel needs " << kernelLocalMemoryBytes()
+      << " bytes of local memory per work-group, the device '" << ctx_.device().device_name
+      << "' offers " << device_local << "; choose another device (emf devices)";
+    throw ResourceError(s.str());
+  }
   const int max_groups = numGroups(1);
   partials_ = ctx_.buffer(CL_MEM_READ_WRITE, sizeof(float) * kTerms * max_groups);
   reduced_ = ctx_.buffer(CL_MEM_READ_WRITE, sizeof(float) * kTerms);
@@ -230,6 +240,13 @@ Tracker::Tracker(cl::Context& ctx, const TrackOptions& options, int width, int h
 }
 
 int Tracker::localSize() { return kLocalSize; }
+
+size_t Tracker::kernelLocalMemoryBytes() const {
+  cl_ulong bytes = 0;
+  EMF_CL_CHECK(clGetKernelWorkGroupInfo(accumulate_.get(), ctx_.deviceId(),
+                                        CL_KERNEL_LOCAL_MEM_SIZE, sizeof(bytes), &bytes, nullptr));
+  return static_cast<size_t>(bytes);
+}
 
 int Tracker::numGroups(int stride) const {
   const int sw = (width_ + stride - 1) / stride;

@@ -152,6 +152,8 @@ class Tracker {
   /// Work-group size of the accumulation kernel and the number of groups used at `stride`.
   static int localSize();
   int numGroups(int stride) const;
+  /// Local memory one work-group of the accumulation kernel uses on this device (bytes).
+  size_t kernelLocalMemoryBytes() const;
 
  private:
   struct LevelResult {

@@ -217,6 +217,10 @@ TEST_F(Pool, GrowReindexesWithoutMovingVoxels) {
   // World position of the origin moved by -low blocks.
   const Eigen::Vector3d shift = vol.T_world_volume().translation() - T_wv.translation();
   EXPECT_LT((shift + low.cast<double>() * 0.16).norm(), 1e-6) << shift.transpose();
+  // The initial frame (where object poses are reported) stays where it was.
+  EXPECT_TRUE(vol.T_world_initial().isApprox(T_wv, 1e-9));
+  EXPECT_LT((vol.T_volume_initial().translation() - low.cast<double>() * 0.16).norm(), 1e-6);
+  EXPECT_TRUE(h1.T_volume_initial.isApprox(vol.T_volume_initial()));
   // Every old block is at old + low, pointing to the same pool slot.
   for (int lin = 0; lin < spec.blockCount(); ++lin) {
     const Eigen::Vector3i b = map::blockCoords(spec.dims_blocks, lin);

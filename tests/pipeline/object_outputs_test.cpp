@@ -200,6 +200,20 @@ TEST(ObjectOutputs, MeshIsInTheObjectFrame) {
   // An object that never got a mesh reports none.
   out.add(frame(1, {object(6, "cup", ObjectState::kTracked, 0.0)}));
   EXPECT_EQ(out.summaries()[1].mesh_file, "");
+  // After growth the volume origin moved by whole blocks (-low); the mesh stays in the
+  // object's frame (the volume frame at creation), where the sphere is at centre - low.
+  map::VolumeHostData grown = sphereVolume(centre, radius, voxel);
+  const Eigen::Vector3d low_m(0.08, 0.0, 0.16);
+  grown.T_volume_initial.translation() = low_m;
+  out.writeMesh(7, grown);
+  const map::Mesh g = map::readPly(dir + "/object-7.ply");
+  ASSERT_EQ(g.vertices.size(), m.vertices.size());
+  float max_grown_err = 0;
+  for (const Eigen::Vector3f& v : g.vertices) {
+    max_grown_err =
+        std::max(max_grown_err, std::abs((v - (centre - low_m.cast<float>())).norm() - radius));
+  }
+  EXPECT_LT(max_grown_err, kMeshToleranceVoxels * voxel);
 }
 
 TEST(ObjectOutputs, ObjectColorsAreDistinct) {

@@ -575,6 +575,13 @@ TEST_F(TrackerTest, EmptyFrameIsLostWithoutDepth) {
   EXPECT_TRUE(r.T_volume_camera.isApprox(room_->T_volume_camera_gt));
 }
 
+TEST_F(TrackerTest, AccumulationKernelFitsTheLocalMemoryOpenCl12Guarantees) {
+  // Boards with small GPUs (32 KiB of local memory, the OpenCL 1.2 minimum) must run it.
+  constexpr size_t kOpenCl12MinLocalMemoryBytes = 32 * 1024;
+  const Tracker tracker(ctx(), TrackOptions{}, 320, 240);
+  EXPECT_LE(tracker.kernelLocalMemoryBytes(), kOpenCl12MinLocalMemoryBytes);
+}
+
 TEST_F(TrackerTest, BadArgumentsAreClearErrors) {
   TrackOptions o;
   o.final_reduction = "gpu";
