@@ -10,9 +10,9 @@
 //
 // One work item per 16 consecutive sampled pixels of a row (the lanes of 16-wide vectors), on a
 // 2D range over the sampled grid: no loops and no early exits. Lanes outside the grid or
-// without a valid sample contribute zeros. Each item adds up its lanes per term, the
-// work-group then adds up its 16 items' terms in local memory (one float per item and term) and
-// writes one row of TRACK_TERMS partials:
+// without a valid sample contribute zeros. Each item folds its 16 lanes per term to 8, the
+// work-group then adds up its 16 items' terms in local memory (then the 8 lanes) and writes one
+// row of TRACK_TERMS partials:
 //   [0, 21)  upper triangle of H = sum c h J J^T (row-major: 00 01 .. 05 11 12 .. 55)
 //   [21, 27) g = sum c h J r
 //   27 cost = sum c rho(r)      28 valid samples
@@ -42,32 +42,26 @@
 #error "track_accumulate's final reduction is written for 16 work items per group"
 #endif
 
-// Sum (max) of the 16 lanes of one work item's term.
-__attribute__((always_inline)) inline float track_lanes_sum(const float16 v) {
-  const float8 s8 = v.lo + v.hi;
-  const float4 s4 = s8.lo + s8.hi;
-  return (s4.x + s4.y) + (s4.z + s4.w);
-}
-__attribute__((always_inline)) inline float track_lanes_max(const float16 v) {
-  const float8 s8 = fmax(v.lo, v.hi);
-  const float4 s4 = fmax(s8.lo, s8.hi);
-  return fmax(fmax(s4.x, s4.y), fmax(s4.z, s4.w));
-}
+// Lanes l and l + 8 of a term added (the first step of its sum over the lanes).
+__attribute__((always_inline)) inline float8 track_fold(const float16 v) { return v.lo + v.hi; }
 
-// Sum (max for TRACK_MAX_TERM) of term t over the 16 items of a group, written to row[t].
-__attribute__((always_inline)) inline void track_reduce_term(__local const float* shared, int t,
+// Sum (max for TRACK_MAX_TERM) of term t over the 16 items' (folded) vectors of a group, then
+// over the 8 lanes, written to row[t].
+__attribute__((always_inline)) inline void track_reduce_term(__local const float8* shared, int t,
                                                              __global float* row) {
-  __local const float* col = shared + TRACK_ITEMS * t;
+  __local const float8* col = shared + TRACK_ITEMS * t;
   if (t == TRACK_MAX_TERM) {
-    const float s = fmax(fmax(fmax(col[0], col[1]), fmax(col[2], col[3])),
-                         fmax(fmax(col[4], col[5]), fmax(col[6], col[7])));
-    row[t] = fmax(s, fmax(fmax(fmax(col[8], col[9]), fmax(col[10], col[11])),
-                          fmax(fmax(col[12], col[13]), fmax(col[14], col[15]))));
+    float8 s = fmax(fmax(fmax(col[0], col[1]), fmax(col[2], col[3])),
+                    fmax(fmax(col[4], col[5]), fmax(col[6], col[7])));
+    s = fmax(s, fmax(fmax(fmax(col[8], col[9]), fmax(col[10], col[11])),
+                     fmax(fmax(col[12], col[13]), fmax(col[14], col[15]))));
+    const float4 s4 = fmax(s.lo, s.hi);
+    row[t] = fmax(fmax(s4.x, s4.y), fmax(s4.z, s4.w));
   } else {
-    const float s =
-        ((col[0] + col[1]) + (col[2] + col[3])) + ((col[4] + col[5]) + (col[6] + col[7]));
-    row[t] = s + (((col[8] + col[9]) + (col[10] + col[11])) +
-                  ((col[12] + col[13]) + (col[14] + col[15])));
+    float8 s = ((col[0] + col[1]) + (col[2] + col[3])) + ((col[4] + col[5]) + (col[6] + col[7]));
+    s += ((col[8] + col[9]) + (col[10] + col[11])) + ((col[12] + col[13]) + (col[14] + col[15]));
+    const float4 s4 = s.lo + s.hi;
+    row[t] = (s4.x + s4.y) + (s4.z + s4.w);
   }
 }
 
@@ -77,10 +71,10 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
     const int4 dims, __global const short2* voxels, const float voxel_size, const float truncation,
     const float huber_delta, const float inlier_noise, __global const float* prev_cost,
     __global float* pixel_cost, const int compare, __global float* partials) {
-  // Term t of item k (its 16 lanes, i.e. pixels, already added up): shared[t * TRACK_ITEMS +
-  // k]. 35 x 16 floats = 2240 bytes of local memory (OpenCL 1.2 guarantees 32 KiB; the float16
-  // form, 35 KiB, did not fit there).
-  __local float shared[TRACK_TERMS * TRACK_ITEMS];
+  // Term t of item k, its 16 lanes (pixels) folded to 8 (lanes l and l + 8 added):
+  // shared[t * TRACK_ITEMS + k]. 35 x 16 float8 = 17.5 KiB of local memory (OpenCL 1.2
+  // guarantees 32 KiB; unfolded float16, 35 KiB, did not fit there).
+  __local float8 shared[TRACK_TERMS * TRACK_ITEMS];
   const int lid = get_local_id(0) + TRACK_LX * get_local_id(1);
   const int sw = (width + stride - 1) / stride;
   const int sh = (height + stride - 1) / stride;
@@ -129,8 +123,8 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
   const float16 j3 = valid ? y * j2 - z * j1 : 0.0f;
   const float16 j4 = valid ? z * j0 - x * j2 : 0.0f;
   const float16 j5 = valid ? x * j1 - y * j0 : 0.0f;
-  __local float* mine = shared + lid;
-#define TRACK_PUT(k, value) mine[TRACK_ITEMS * (k)] = track_lanes_sum(value)
+  __local float8* mine = shared + lid;
+#define TRACK_PUT(k, value) mine[TRACK_ITEMS * (k)] = track_fold(value)
   const float16 w0 = hw * j0, w1 = hw * j1, w2 = hw * j2, w3 = hw * j3, w4 = hw * j4, w5 = hw * j5;
   TRACK_PUT(0, w0 * j0);
   TRACK_PUT(1, w0 * j1);
@@ -163,7 +157,8 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
   TRACK_PUT(28, valid ? 1.0f : 0.0f);
   TRACK_PUT(29, (valid & (abs_r <= fmax(huber_delta, inlier_noise * pz * pz))) ? 1.0f : 0.0f);
   TRACK_PUT(30, input ? 1.0f : 0.0f);
-  mine[TRACK_ITEMS * TRACK_MAX_TERM] = track_lanes_max(valid ? weight : 0.0f);
+  const float16 max_w = valid ? weight : 0.0f;
+  mine[TRACK_ITEMS * TRACK_MAX_TERM] = fmax(max_w.lo, max_w.hi);
   TRACK_PUT(32, common ? cost - prev : 0.0f);
   TRACK_PUT(33, common ? 1.0f : 0.0f);
   TRACK_PUT(34, (valid & inlier) ? 1.0f : 0.0f);
