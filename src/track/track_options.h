@@ -67,8 +67,8 @@ struct TrackOptions {
   // level). See track::Tracker.
   /// Lost when (pixels landing on observed map) / (pixels with valid depth) is below this.
   double min_valid_fraction = 0.3;
-  /// Lost when (pixels with |psi| <= Huber delta) / (pixels landing on observed map) is below.
-  /// 0.75: real frames tracked correctly show >= 0.85 (redkitchen-0-299), frames integrated
+  /// Lost when (points within the inlier radius, below) / (points landing on observed map) is
+  /// below. 0.75: real frames tracked correctly show >= 0.85 (redkitchen-0-299), frames integrated
   /// 4-9 cm / 6-9 deg off on tum-fr3-cabinet-keyframes 0.65-0.71.
   double min_inlier_ratio = 0.75;
   /// Inlier radius of the loss rules: a point is an inlier when |psi| <= max(Huber delta,
@@ -123,7 +123,7 @@ struct TrackOptions {
     b.real("min_valid_fraction", min_valid_fraction, 0.0, 1.0, "",
            "lost below this fraction of depth pixels landing on the observed map");
     b.real("min_inlier_ratio", min_inlier_ratio, 0.0, 1.0, "",
-           "lost below this fraction of map points with |psi| <= Huber delta");
+           "lost below this fraction of map points within the inlier radius");
     b.real("inlier_noise_per_m2", inlier_noise_per_m2, 0.0, 1.0, "m/m^2",
            "loss rules: inlier radius max(Huber delta, this x depth^2) (depth noise; 0 = delta)");
     b.real("recovery_min_inlier_ratio", recovery_min_inlier_ratio, 0.0, 1.0, "",
