@@ -122,6 +122,14 @@ bool mayCreate(const io::Detection& d, const VolumePlacement& placement,
     return false;
   };
   if (!classMayCreate(d.class_name, options)) return fail("class on objects.exclude_classes");
+  const int visible = maskVisiblePixels(d.mask, options);
+  if (visible < options.invisible_min_px) {
+    return fail("only " + std::to_string(visible) +
+                " mask px inside the image shrunk by objects.visibility_border_px, below "
+                "objects.invisible_min_px " +
+                std::to_string(options.invisible_min_px) +
+                " (it would be deleted as invisible in the next frame)");
+  }
   if (placement.extent_m <= 0) return fail("too few valid depth points in the mask");
   if ((placement.centre_world - camera_position_world).norm() > options.max_create_distance_m) {
     return fail("centre farther than objects.max_create_distance_m");
@@ -149,6 +157,15 @@ cv::Mat idMask(const cv::Mat& object_ids, int object_id) {
   return ids == object_id;
 }
 }  // namespace
+
+int maskVisiblePixels(const cv::Mat& mask, const ObjectOptions& options) {
+  const int b = options.visibility_border_px;
+  if (mask.empty() || mask.cols <= 2 * b || mask.rows <= 2 * b) return 0;
+  const cv::Rect inner(b, b, mask.cols - 2 * b, mask.rows - 2 * b);
+  cv::Mat m;
+  mask(inner).convertTo(m, CV_32F);
+  return cv::countNonZero(m > 0.5f);
+}
 
 int visiblePixels(const cv::Mat& object_ids, int object_id, const ObjectOptions& options) {
   const int b = options.visibility_border_px;

@@ -68,7 +68,14 @@ double boxIoU(const OrientedBox& a, const OrientedBox& b, int n = 24);
 /// CV_32S or CV_16U, > 0 = some object). 0 for an empty mask.
 double maskCoveredFraction(const cv::Mat& detection_mask, const cv::Mat& object_ids);
 
-/// All creation checks of step 5 for one unmatched detection. `reason` says which failed.
+/// Pixels of a detection mask (p > 0.5) inside the image shrunk by objects.visibility_border_px:
+/// the step-6 visibility count of the object it would create.
+int maskVisiblePixels(const cv::Mat& mask, const ObjectOptions& options);
+
+/// All creation checks of step 5 for one unmatched detection. `reason` says which failed. Beyond
+/// the paper: a mask with fewer than objects.invisible_min_px visible pixels (maskVisiblePixels)
+/// creates nothing, since step 6 would delete the object as invisible in the next frame (a
+/// 40x40 box lying mostly in the border band passes the size filter).
 bool mayCreate(const io::Detection& d, const VolumePlacement& placement,
                const Eigen::Vector3d& camera_position_world,
                const std::vector<OrientedBox>& existing_volumes, const cv::Mat& object_ids,

@@ -145,6 +145,21 @@ TEST(ObjectRules, CreationChecks) {
 
   EXPECT_FALSE(mayCreate(detection("oven", {100, 100, 100, 100}), p, cam, {}, ids, o, &why));
   EXPECT_NE(why.find("exclude_classes"), std::string::npos);
+
+  // A box that passes the size filter but lies half in the 20 px border band: 40 x 40 at the
+  // left edge leaves 20 x 40 = 800 visible px < 1600: deleted at once, so not created.
+  const io::Detection edge = detection("cup", {0, 200, 40, 40});
+  EXPECT_EQ(detectionUse(edge, o), DetectionUse::kUse);
+  EXPECT_EQ(maskVisiblePixels(edge.mask, o), 20 * 40);
+  EXPECT_FALSE(mayCreate(edge, p, cam, {}, ids, o, &why));
+  EXPECT_NE(why.find("invisible_min_px"), std::string::npos) << why;
+  // Mask values at or below 0.5 are not the object's.
+  io::Detection faint = d;
+  faint.mask = d.mask.clone();  // (a copied Detection shares d's pixels)
+  faint.mask *= 0.5f;
+  EXPECT_EQ(maskVisiblePixels(faint.mask, o), 0);
+  EXPECT_FALSE(mayCreate(faint, p, cam, {}, ids, o, &why));
+  EXPECT_EQ(maskVisiblePixels(d.mask, o), 100 * 100);
 }
 
 TEST(ObjectRules, VisibilityIgnoresBorder) {
