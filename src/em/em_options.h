@@ -54,6 +54,13 @@ struct ObjectOptions {
   bool free_space_full_weight = false;
   bool filter_depth = false;
   int max_grow_blocks = 4;
+  /// A new object is built from the largest depth-continuous part of its detection mask: mask
+  /// pixels with a depth jump above creation_depth_jump_m + creation_depth_jump_per_m2 * z^2 to
+  /// a 4-neighbour separate regions (creationMask in em/object_rules.h). A detector's mask that
+  /// spills past the object's silhouette onto a surface behind it otherwise widens the volume
+  /// and puts that surface into the object's first model. 0 = the whole mask (the paper).
+  double creation_depth_jump_m = 0.03;
+  double creation_depth_jump_per_m2 = 0.01;
 
   void bind(OptionBinder& b) {
     // Pixel thresholds refer to 640x480 images; the SLAM scales them with the image width.
@@ -90,6 +97,11 @@ struct ObjectOptions {
               "object volumes alive at once (sizes the per-frame buffers)");
     b.integer("max_grow_blocks", max_grow_blocks, 0, 64, "blocks",
               "most blocks an object volume grows per side on one detection");
+    b.real("creation_depth_jump_m", creation_depth_jump_m, 0.0, 10.0, "m",
+           "a new object is built from the largest part of its mask without a depth jump above "
+           "this (+ creation_depth_jump_per_m2 x depth^2) between neighbours (0 = whole mask)");
+    b.real("creation_depth_jump_per_m2", creation_depth_jump_per_m2, 0.0, 10.0, "m/m^2",
+           "depth-dependent part of the creation mask's depth-jump threshold");
   }
 };
 

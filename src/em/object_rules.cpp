@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 
 namespace emf::em {
 
@@ -157,6 +158,70 @@ cv::Mat idMask(const cv::Mat& object_ids, int object_id) {
   return ids == object_id;
 }
 }  // namespace
+
+cv::Mat creationMask(const cv::Mat& mask, const cv::Mat& vertex, const ObjectOptions& options) {
+  CV_Assert(mask.type() == CV_32F && vertex.type() == CV_32FC4 && mask.size() == vertex.size());
+  if (options.creation_depth_jump_m <= 0.0) return mask.clone();
+  // Pixels of the mask with valid depth and no depth jump to any valid 4-neighbour.
+  cv::Mat smooth(mask.size(), CV_8U, cv::Scalar(0));
+  const int du[4] = {1, -1, 0, 0};
+  const int dv[4] = {0, 0, 1, -1};
+  for (int v = 0; v < mask.rows; ++v) {
+    for (int u = 0; u < mask.cols; ++u) {
+      if (!(mask.at<float>(v, u) > 0.5f)) continue;
+      const cv::Vec4f& p = vertex.at<cv::Vec4f>(v, u);
+      if (p[3] == 0.0f) continue;
+      const double z = p[2];
+      const double jump =
+          options.creation_depth_jump_m + options.creation_depth_jump_per_m2 * z * z;
+      bool continuous = true;
+      for (int k = 0; k < 4 && continuous; ++k) {
+        const int uu = u + du[k], vv = v + dv[k];
+        if (uu < 0 || vv < 0 || uu >= mask.cols || vv >= mask.rows) continue;
+        const cv::Vec4f& q = vertex.at<cv::Vec4f>(vv, uu);
+        if (q[3] != 0.0f && std::abs(static_cast<double>(q[2]) - z) > jump) continuous = false;
+      }
+      if (continuous) smooth.at<uint8_t>(v, u) = 255;
+    }
+  }
+  cv::Mat labels, stats, centroids;
+  const int n = cv::connectedComponentsWithStats(smooth, labels, stats, centroids, 4, CV_32S);
+  int largest = 0;
+  for (int i = 1; i < n; ++i) {
+    if (largest == 0 ||
+        stats.at<int>(i, cv::CC_STAT_AREA) > stats.at<int>(largest, cv::CC_STAT_AREA)) {
+      largest = i;
+    }
+  }
+  cv::Mat out = cv::Mat::zeros(mask.size(), CV_32F);
+  if (largest == 0) return out;
+  // The region plus the mask pixels next to it without a jump to their neighbour in it: the
+  // object's own silhouette pixels, which have a jump to the surface behind only.
+  for (int v = 0; v < mask.rows; ++v) {
+    for (int u = 0; u < mask.cols; ++u) {
+      if (labels.at<int>(v, u) == largest) {
+        out.at<float>(v, u) = mask.at<float>(v, u);
+        continue;
+      }
+      if (!(mask.at<float>(v, u) > 0.5f)) continue;
+      const cv::Vec4f& p = vertex.at<cv::Vec4f>(v, u);
+      if (p[3] == 0.0f) continue;
+      const double z = p[2];
+      const double jump =
+          options.creation_depth_jump_m + options.creation_depth_jump_per_m2 * z * z;
+      for (int k = 0; k < 4; ++k) {
+        const int uu = u + du[k], vv = v + dv[k];
+        if (uu < 0 || vv < 0 || uu >= mask.cols || vv >= mask.rows) continue;
+        if (labels.at<int>(vv, uu) != largest) continue;
+        if (std::abs(static_cast<double>(vertex.at<cv::Vec4f>(vv, uu)[2]) - z) <= jump) {
+          out.at<float>(v, u) = mask.at<float>(v, u);
+          break;
+        }
+      }
+    }
+  }
+  return out;
+}
 
 int maskVisiblePixels(const cv::Mat& mask, const ObjectOptions& options) {
   const int b = options.visibility_border_px;

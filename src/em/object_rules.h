@@ -72,6 +72,18 @@ double maskCoveredFraction(const cv::Mat& detection_mask, const cv::Mat& object_
 /// the step-6 visibility count of the object it would create.
 int maskVisiblePixels(const cv::Mat& mask, const ObjectOptions& options);
 
+/// Step 5, the mask a new object is built from (beyond the paper): the largest 4-connected
+/// region of the detection's mask pixels (p > 0.5, valid vertex) in which no pixel has a depth
+/// jump above creation_depth_jump_m + creation_depth_jump_per_m2 * z^2 to a valid 4-neighbour,
+/// plus the mask pixels next to that region without such a jump to their neighbour in it (the
+/// object's own silhouette pixels).
+/// Detector masks spill over silhouettes: the spilled pixels lie on the surface behind, across a
+/// depth jump, and would widen the volume's 10th-90th percentile extent and enter the object's
+/// first model with full weight. Returns `mask` (CV_32F, same size) with the pixels outside that
+/// region set to 0; `mask` unchanged when creation_depth_jump_m is 0. `vertex` is the CV_32FC4
+/// camera-frame vertex map (w = 0: invalid).
+cv::Mat creationMask(const cv::Mat& mask, const cv::Mat& vertex, const ObjectOptions& options);
+
 /// All creation checks of step 5 for one unmatched detection. `reason` says which failed. Beyond
 /// the paper: a mask with fewer than objects.invisible_min_px visible pixels (maskVisiblePixels)
 /// creates nothing, since step 6 would delete the object as invisible in the next frame (a

@@ -228,7 +228,9 @@ void SlamSystem::matchDetections(const DetectionBatch& batch, FrameOutcome* out)
 void SlamSystem::createObjects() {
   if (unmatched_.empty()) return;
   const cv::Mat vertex = downloadVertexMap();
-  for (const io::Detection& d : unmatched_) {
+  for (const io::Detection& detected : unmatched_) {
+    io::Detection d = detected;  // the part of the mask the object is built from
+    d.mask = em::creationMask(detected.mask, vertex, config_.objects);
     if (!createObject(d, vertex)) continue;
     if (created_mask_.empty()) created_mask_ = cv::Mat::zeros(d.mask.size(), CV_32F);
     created_mask_ = cv::max(created_mask_, d.mask);

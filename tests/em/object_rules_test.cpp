@@ -109,6 +109,95 @@ TEST(ObjectRules, BoxIoU) {
   EXPECT_NEAR(boxIoU(a, c), 1.0, kIoUGridTolerance);
 }
 
+/// Camera-frame vertex map (CV_32FC4, w = 1) of a pinhole camera (f 100 px, centre of the
+/// image) looking at per-pixel depths z (CV_32F, <= 0: invalid, w = 0).
+cv::Mat vertexMap(const cv::Mat& z) {
+  cv::Mat vertex(z.size(), CV_32FC4, cv::Scalar::all(0));
+  for (int v = 0; v < z.rows; ++v) {
+    for (int u = 0; u < z.cols; ++u) {
+      const float d = z.at<float>(v, u);
+      if (d <= 0.f) continue;
+      vertex.at<cv::Vec4f>(v, u) = {(u - 0.5f * z.cols) / 100.f * d,
+                                    (v - 0.5f * z.rows) / 100.f * d, d, 1.f};
+    }
+  }
+  return vertex;
+}
+
+std::vector<Eigen::Vector3d> pointsUnder(const cv::Mat& mask, const cv::Mat& vertex) {
+  std::vector<Eigen::Vector3d> pts;
+  for (int v = 0; v < mask.rows; ++v) {
+    for (int u = 0; u < mask.cols; ++u) {
+      const cv::Vec4f& p = vertex.at<cv::Vec4f>(v, u);
+      if (mask.at<float>(v, u) > 0.5f && p[3] != 0.f) pts.emplace_back(p[0], p[1], p[2]);
+    }
+  }
+  return pts;
+}
+
+TEST(ObjectRules, CreationMaskDropsWhatSpillsOverTheSilhouette) {
+  // A 20x20 px object 2 m away, slanted (1 mm per px) with +-1 cm noise, in front of a wall at
+  // 3 m; one pixel inside it has no depth. The detector's mask is the object dilated by 3 px
+  // (p_fg 0.8), so 276 of its 676 pixels lie on the wall across a 1 m depth jump.
+  const cv::Rect object(30, 20, 20, 20);
+  cv::Mat z(60, 80, CV_32F, cv::Scalar(3.0f));
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> noise(-0.01f, 0.01f);
+  for (int v = object.y; v < object.br().y; ++v) {
+    for (int u = object.x; u < object.br().x; ++u)
+      z.at<float>(v, u) = 2.0f + 0.001f * u + noise(rng);
+  }
+  z.at<float>(30, 40) = 0.f;
+  const cv::Mat vertex = vertexMap(z);
+  cv::Mat mask = cv::Mat::zeros(z.size(), CV_32F);
+  mask(cv::Rect(object.x - 3, object.y - 3, object.width + 6, object.height + 6)).setTo(0.8f);
+
+  ObjectOptions o;  // 3 cm + 1 cm/m^2 x z^2: 7 cm at 2 m
+  const cv::Mat kept = creationMask(mask, vertex, o);
+  ASSERT_EQ(kept.size(), mask.size());
+  ASSERT_EQ(kept.type(), CV_32F);
+  // Every object pixel with depth but the 4 corners (the silhouette rim joins through its inner
+  // neighbours; a corner's inner neighbours are rim pixels), no wall pixel.
+  EXPECT_EQ(cv::countNonZero(kept), object.area() - 1 - 4);
+  EXPECT_EQ(cv::countNonZero(kept(object)), object.area() - 1 - 4);
+  EXPECT_EQ(kept.at<float>(30, 40), 0.f);
+  double lo = 0, hi = 0;
+  cv::minMaxLoc(kept, &lo, &hi, nullptr, nullptr, kept > 0.f);
+  EXPECT_FLOAT_EQ(static_cast<float>(lo), 0.8f);  // p_fg carried over
+  EXPECT_FLOAT_EQ(static_cast<float>(hi), 0.8f);
+
+  // Why: the wall pixels put the 90th depth percentile on the wall, so the volume would be
+  // built 2 x 1 m deep; from the kept pixels it is 2 x the object's 10th-90th extent.
+  const VolumePlacement spilled = placeObject(pointsUnder(mask, vertex), o);
+  const VolumePlacement refined = placeObject(pointsUnder(kept, vertex), o);
+  EXPECT_GT(spilled.extent_m, 1.9);
+  const double object_width_m = object.width / 100.0 * 2.0;  // 0.4 m at 2 m
+  EXPECT_LT(refined.extent_m, 2.0 * object_width_m);
+  EXPECT_GT(refined.extent_m, 2.0 * 0.7 * object_width_m);
+
+  // Off: the whole mask.
+  o.creation_depth_jump_m = 0.0;
+  EXPECT_EQ(cv::countNonZero(creationMask(mask, vertex, o) != mask), 0);
+}
+
+TEST(ObjectRules, CreationMaskKeepsTheLargestContinuousPart) {
+  // A continuous floor seen at 1.5-2.5 m under the whole mask keeps every pixel with depth; a
+  // second object behind a jump keeps only the larger part.
+  cv::Mat z(60, 80, CV_32F);
+  for (int v = 0; v < z.rows; ++v) z.row(v).setTo(2.5f - v / 60.f);
+  ObjectOptions o;
+  cv::Mat mask = cv::Mat::zeros(z.size(), CV_32F);
+  mask(cv::Rect(10, 10, 50, 40)).setTo(1.f);
+  EXPECT_EQ(cv::countNonZero(creationMask(mask, vertexMap(z), o)), 50 * 40);
+
+  z(cv::Rect(10, 10, 50, 10)).setTo(4.0f);  // rows 10-19 jump back to 4 m
+  const cv::Mat kept = creationMask(mask, vertexMap(z), o);
+  // Rows 20-49 (row 20 borders the jump, and joins through row 21); rows 10-19 are the
+  // smaller part.
+  EXPECT_EQ(cv::countNonZero(kept), 50 * 30);
+  EXPECT_EQ(cv::countNonZero(kept(cv::Rect(10, 10, 50, 10))), 0);
+}
+
 TEST(ObjectRules, CreationChecks) {
   ObjectOptions o;
   io::Detection d = detection("cup", {100, 100, 100, 100});
