@@ -19,12 +19,13 @@
 //   29 inliers: |r| <= max(delta, inlier_noise * z^2), z the pixel's camera-frame depth (the
 //      loss rule's count; the cost keeps delta)
 //   30 input pixels (valid vertex and q > 0)          31 max W over valid samples (a max)
-//   32 sum over pixels valid now and in `prev_cost` of (c rho(r) - prev_cost)
+//   32 sum over pixels valid now and in `prev_cost` of (c' rho(r) - prev_cost), c' = c, or
+//      with fixed_weights the previous pose's c (prev_cost.y)
 //   33 number of those pixels                         34 strict inliers (|r| <= delta)
-// Every sampled pixel's own cost c rho(r) (NaN when not valid) is written to pixel_cost, so
-// that the next evaluation can compare costs over the pixels valid at both poses (points
-// entering or leaving the observed map would otherwise make E jump between poses).
-// compare = 0: prev_cost is not read (first evaluation of a level).
+// Every sampled pixel's own cost c rho(r) and weight c (cost NaN when not valid) are written to
+// pixel_cost, so that the next evaluation can compare costs over the pixels valid at both
+// poses (points entering or leaving the observed map would otherwise make E jump between
+// poses). compare = 0: prev_cost is not read (first evaluation of a level).
 #include "common.clh"
 #include "voxel_access.clh"
 
@@ -69,8 +70,9 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
     __global const float4* vertex, __global const float* q, const int width, const int height,
     const int stride, const float4 r0, const float4 r1, const float4 r2, __global const int* index,
     const int4 dims, __global const short2* voxels, const float voxel_size, const float truncation,
-    const float huber_delta, const float inlier_noise, __global const float* prev_cost,
-    __global float* pixel_cost, const int compare, __global float* partials) {
+    const float huber_delta, const float inlier_noise, __global const float2* prev_cost,
+    __global float2* pixel_cost, const int compare, const int fixed_weights,
+    __global float* partials) {
   // Term t of item k, its 16 lanes (pixels) folded to 8 (lanes l and l + 8 added):
   // shared[t * TRACK_ITEMS + k]. 35 x 16 float8 = 17.5 KiB of local memory (OpenCL 1.2
   // guarantees 32 KiB; unfolded float16, 35 KiB, did not fit there).
@@ -84,16 +86,18 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
   const int16 in_grid = (su < sw) & (int16)(sv < sh ? -1 : 0);
   // Pixel of each lane (0 outside the sampled grid, so that every read stays valid).
   const int16 pix = in_grid ? sv * stride * width + su * stride : 0;
-  float16 px, py, pz, pw, qu, prev;
-#define TRACK_LOAD(l)                  \
-  {                                    \
-    const float4 p = vertex[pix.s##l]; \
-    px.s##l = p.x;                     \
-    py.s##l = p.y;                     \
-    pz.s##l = p.z;                     \
-    pw.s##l = p.w;                     \
-    qu.s##l = q[pix.s##l];             \
-    prev.s##l = prev_cost[pix.s##l];   \
+  float16 px, py, pz, pw, qu, prev, prev_c;
+#define TRACK_LOAD(l)                      \
+  {                                        \
+    const float4 p = vertex[pix.s##l];     \
+    px.s##l = p.x;                         \
+    py.s##l = p.y;                         \
+    pz.s##l = p.z;                         \
+    pw.s##l = p.w;                         \
+    qu.s##l = q[pix.s##l];                 \
+    const float2 pc = prev_cost[pix.s##l]; \
+    prev.s##l = pc.x;                      \
+    prev_c.s##l = pc.y;                    \
   }
   EMF_LANES16(TRACK_LOAD)
 #undef TRACK_LOAD
@@ -110,10 +114,11 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
   const float16 abs_r = fabs(r);
   const int16 inlier = abs_r <= huber_delta;
   const float16 c = valid ? qu * weight : 0.0f;
-  const float16 cost = c * (inlier ? 0.5f * r * r : huber_delta * (abs_r - 0.5f * huber_delta));
+  const float16 rho = inlier ? 0.5f * r * r : huber_delta * (abs_r - 0.5f * huber_delta);
+  const float16 cost = c * rho;
   const float16 own_cost = valid ? cost : NAN;
 #define TRACK_STORE(l) \
-  if (in_grid.s##l) pixel_cost[pix.s##l] = own_cost.s##l;
+  if (in_grid.s##l) pixel_cost[pix.s##l] = (float2)(own_cost.s##l, c.s##l);
   EMF_LANES16(TRACK_STORE)
 #undef TRACK_STORE
   const int16 common = valid & (int16)(compare ? -1 : 0) & !isnan(prev);
@@ -159,7 +164,8 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
   TRACK_PUT(30, input ? 1.0f : 0.0f);
   const float16 max_w = valid ? weight : 0.0f;
   mine[TRACK_ITEMS * TRACK_MAX_TERM] = fmax(max_w.lo, max_w.hi);
-  TRACK_PUT(32, common ? cost - prev : 0.0f);
+  const float16 change = (fixed_weights ? prev_c * rho : cost) - prev;
+  TRACK_PUT(32, common ? change : 0.0f);
   TRACK_PUT(33, common ? 1.0f : 0.0f);
   TRACK_PUT(34, (valid & inlier) ? 1.0f : 0.0f);
 #undef TRACK_PUT

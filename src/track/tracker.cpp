@@ -99,15 +99,19 @@ NormalEquations accumulateReference(const map::VolumeHostView& volume, const cv:
                                     const cv::Mat& q, int stride,
                                     const Eigen::Isometry3d& T_volume_camera, double huber_delta_m,
                                     const cv::Mat* prev_cost, cv::Mat* pixel_cost,
-                                    double inlier_noise_per_m2) {
+                                    double inlier_noise_per_m2, bool fixed_weights) {
   if (vertex.type() != CV_32FC4 || (!q.empty() && (q.type() != CV_32F || q.size != vertex.size))) {
     throw InvalidArgument(
         "accumulateReference: vertex must be CV_32FC4 and q empty or CV_32F of the same size");
   }
   if (stride < 1) throw InvalidArgument("accumulateReference: stride must be >= 1");
-  if (pixel_cost && (pixel_cost->type() != CV_32F || pixel_cost->size != vertex.size)) {
-    pixel_cost->create(vertex.rows, vertex.cols, CV_32F);
-    pixel_cost->setTo(std::numeric_limits<float>::quiet_NaN());
+  if (prev_cost && (prev_cost->type() != CV_32FC2 || prev_cost->size != vertex.size)) {
+    throw InvalidArgument("accumulateReference: prev_cost must be CV_32FC2 of the vertex size");
+  }
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  if (pixel_cost && (pixel_cost->type() != CV_32FC2 || pixel_cost->size != vertex.size)) {
+    pixel_cost->create(vertex.rows, vertex.cols, CV_32FC2);
+    pixel_cost->setTo(cv::Scalar(kNaN, kNaN));
   }
   double t[kTerms] = {};
   const Eigen::Matrix4f M = T_volume_camera.matrix().cast<float>();
@@ -116,7 +120,7 @@ NormalEquations accumulateReference(const map::VolumeHostView& volume, const cv:
     for (int u = 0; u < vertex.cols; u += stride) {
       const cv::Vec4f p = vertex.at<cv::Vec4f>(v, u);
       const float qu = q.empty() ? 1.0f : q.at<float>(v, u);
-      if (pixel_cost) pixel_cost->at<float>(v, u) = std::numeric_limits<float>::quiet_NaN();
+      if (pixel_cost) pixel_cost->at<cv::Vec2f>(v, u) = {kNaN, 0.0f};
       if (!(p[3] > 0.0f) || !(qu > 0.0f)) continue;
       t[kInput] += 1.0;
       // Same float transform as the kernel, so both sample the SDF at the same point.
@@ -134,11 +138,15 @@ NormalEquations accumulateReference(const map::VolumeHostView& volume, const cv:
                    static_cast<float>(inlier_noise_per_m2) * p[2] * p[2]);  // as the kernel
       t[kInliers] += abs_r <= inlier_radius ? 1.0 : 0.0;
       t[kStrictInliers] += inlier ? 1.0 : 0.0;
-      const double cost = c * (inlier ? 0.5 * r * r : delta * (abs_r - 0.5 * delta));
+      const double rho = inlier ? 0.5 * r * r : delta * (abs_r - 0.5 * delta);
+      const double cost = c * rho;
       t[kCost] += cost;
-      if (pixel_cost) pixel_cost->at<float>(v, u) = static_cast<float>(cost);
-      if (prev_cost && !std::isnan(prev_cost->at<float>(v, u))) {
-        t[kCostChange] += cost - prev_cost->at<float>(v, u);
+      if (pixel_cost)
+        pixel_cost->at<cv::Vec2f>(v, u) = {static_cast<float>(cost), static_cast<float>(c)};
+      if (prev_cost && !std::isnan(prev_cost->at<cv::Vec2f>(v, u)[0])) {
+        const cv::Vec2f prev = prev_cost->at<cv::Vec2f>(v, u);
+        const double now = fixed_weights ? static_cast<double>(prev[1]) * rho : cost;
+        t[kCostChange] += now - prev[0];
         t[kCommon] += 1.0;
       }
       const double wt = c * (inlier ? 1.0 : delta / abs_r);
@@ -234,7 +242,7 @@ Tracker::Tracker(cl::Context& ctx, const TrackOptions& options, int width, int h
   const std::vector<float> ones(static_cast<size_t>(width) * height, 1.0f);
   ones_ = ctx_.buffer(CL_MEM_READ_ONLY, ones.size() * sizeof(float), ones.data());
   for (auto& c : costs_) {
-    c = ctx_.buffer(CL_MEM_READ_WRITE, ones.size() * sizeof(float));
+    c = ctx_.buffer(CL_MEM_READ_WRITE, ones.size() * 2 * sizeof(float));
   }
   host_partials_.resize(static_cast<size_t>(kTerms) * max_groups);
 }
@@ -265,8 +273,8 @@ NormalEquations Tracker::evaluate(const map::VolumeDeviceView& volume, cl_mem ve
 }
 
 cv::Mat Tracker::lastPixelCosts() const {
-  cv::Mat out(height_, width_, CV_32F);
-  ctx_.read(costs_[current_], out.ptr<float>(0), out.total() * sizeof(float));
+  cv::Mat out(height_, width_, CV_32FC2);
+  ctx_.read(costs_[current_], out.ptr<float>(0), out.total() * 2 * sizeof(float));
   return out;
 }
 
@@ -291,7 +299,8 @@ NormalEquations Tracker::evaluateCandidate(const map::VolumeDeviceView& volume, 
   cl::setArgs(accumulate_, vertex_map, q ? q : ones_.get(), width_, height_, stride, rows[0],
               rows[1], rows[2], volume.index, dims, volume.voxels, volume.voxel_size_m,
               volume.truncation_m, delta, static_cast<cl_float>(options_.inlier_noise_per_m2),
-              costs_[current_].get(), costs_[1 - current_].get(), compare ? 1 : 0, partials_.get());
+              costs_[current_].get(), costs_[1 - current_].get(), compare ? 1 : 0,
+              static_cast<cl_int>(options_.step_acceptance == "fixed_weights"), partials_.get());
   const int sw = (width_ + stride - 1) / stride;
   const int sh = (height_ + stride - 1) / stride;
   cl::enqueue(ctx_.queue(), accumulate_, static_cast<size_t>((sw + kLanes - 1) / kLanes),

@@ -73,17 +73,18 @@ struct NormalEquations {
 
 /// CPU reference of the track_accumulate kernel (and its reduction), in double. `vertex`:
 /// CV_32FC4 camera-frame points (w = 0 invalid); `q`: CV_32F weights or empty (= ones). Only
-/// pixels (u, v) with u % stride == 0 and v % stride == 0 are used. `prev_cost` (CV_32F, NaN
-/// where invalid; optional) gives cost_change/common; `pixel_cost` (optional) receives each
-/// used pixel's cost c rho(r) (NaN where not valid; other pixels untouched). A point counts as
-/// an inlier when |r| <= max(huber_delta_m, inlier_noise_per_m2 * z^2), z its camera-frame depth
-/// (TrackOptions::inlier_noise_per_m2).
+/// pixels (u, v) with u % stride == 0 and v % stride == 0 are used. `prev_cost` (CV_32FC2: cost,
+/// weight c; cost NaN where invalid; optional) gives cost_change/common: the change of c rho(r)
+/// or, with fixed_weights, of rho(r) weighted by the previous c (TrackOptions::step_acceptance);
+/// `pixel_cost` (optional) receives each used pixel's (c rho(r), c) (cost NaN where not valid;
+/// other pixels untouched). A point counts as an inlier when |r| <= max(huber_delta_m,
+/// inlier_noise_per_m2 * z^2), z its camera-frame depth (TrackOptions::inlier_noise_per_m2).
 NormalEquations accumulateReference(const map::VolumeHostView& volume, const cv::Mat& vertex,
                                     const cv::Mat& q, int stride,
                                     const Eigen::Isometry3d& T_volume_camera, double huber_delta_m,
                                     const cv::Mat* prev_cost = nullptr,
-                                    cv::Mat* pixel_cost = nullptr,
-                                    double inlier_noise_per_m2 = 0.0);
+                                    cv::Mat* pixel_cost = nullptr, double inlier_noise_per_m2 = 0.0,
+                                    bool fixed_weights = false);
 
 /// Why a frame was declared lost (TrackResult::loss).
 enum class TrackLoss {
@@ -136,8 +137,9 @@ class Tracker {
   NormalEquations evaluate(const map::VolumeDeviceView& volume, cl_mem vertex_map, cl_mem q,
                            const Eigen::Isometry3d& T_volume_camera, int stride,
                            bool compare_with_last = false);
-  /// Per-pixel costs of the last evaluate() call (CV_32F; NaN where the sample was not valid;
-  /// pixels not sampled at that stride keep stale values). Blocking read; for tests.
+  /// Per-pixel (cost, weight c) of the last evaluate() call (CV_32FC2; cost NaN where the sample
+  /// was not valid; pixels not sampled at that stride keep stale values). Blocking read; for
+  /// tests.
   cv::Mat lastPixelCosts() const;
 
   /// True when the last track() call on the volume with this index buffer was lost.

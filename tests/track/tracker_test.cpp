@@ -25,6 +25,12 @@ constexpr double kDeviceVsReferenceRelTolerance = 1e-4;
 // One pixel's cost c rho(r): the device transforms points in float (ulp 2.4e-7 m at 2-4 m), so
 // psi may differ by ~2.5e-7 m; with c = 10 and |rho'| <= delta = 0.04 m that is 1e-7 m^2.
 constexpr double kPixelCostTolerance = 1e-7;
+// Per-pixel weight c = q W(p) of kernel and reference: trilinear W on a map whose weights change
+// by 98 % over 2 voxels (unevenWeights), float operations in another order.
+constexpr double kPixelWeightRelTolerance = 1e-3;
+// |gain - 1| of a 1e-4 step with fixed weights (second-order terms and points changing
+// validity; 0.002 measured).
+constexpr double kFirstOrderGainTolerance = 0.01;
 // A point within a float ulp of an allocated-block boundary may land on either side.
 constexpr int kCountTolerance = 2;
 // Central differences with float SDF sampling (psi error ~1e-8 m, step 1e-4).
@@ -191,8 +197,27 @@ TEST_F(TrackerTest, AccumulationMatchesReferenceSynthetic) {
   }
 }
 
+/// The volume with its weights scaled by 0.01-0.99 along x (period 4 voxels), as a map seen
+/// more often in some places than in others: W(p) then moves with the pose.
+test::HostVolume unevenWeights(const test::HostVolume& volume) {
+  test::HostVolume uneven = volume;
+  for (size_t lin = 0; lin < uneven.index.size(); ++lin) {
+    const int slot = uneven.index[lin];
+    if (slot < 0) continue;
+    const int bx = static_cast<int>(lin % static_cast<size_t>(uneven.dims_blocks.x()));
+    for (int i = 0; i < map::kBlockVoxels; ++i) {
+      map::Voxel& voxel = uneven.voxels[static_cast<size_t>(slot) * map::kBlockVoxels + i];
+      const double x = bx * map::kBlockSize + (i % map::kBlockSize);
+      const double f = 0.5 + 0.49 * std::sin(2.0 * kPi * x / 4.0);
+      voxel = map::Voxel::make(voxel.tsdf(), static_cast<float>(voxel.weight() * f));
+    }
+  }
+  return uneven;
+}
+
 TEST_F(TrackerTest, CostChangeOverCommonPixelsMatchesReference) {
-  // The step-acceptance terms: per-pixel costs of one evaluation compared with the next.
+  // The step-acceptance terms: per-pixel costs and weights of one evaluation compared with the
+  // next, for both acceptance rules (track.step_acceptance).
   const io::Intrinsics& k = room_->intrinsics;
   const PreprocessedFrame frame = preprocessReference(room_->depth, k, PreprocessOptions{});
   cl::MemHandle vertex =
@@ -201,36 +226,76 @@ TEST_F(TrackerTest, CostChangeOverCommonPixelsMatchesReference) {
   const Eigen::Isometry3d T1 = perturb(room_->T_volume_camera_gt, rng, 0.03, 3 * kDeg);
   const Eigen::Isometry3d T2 = perturb(T1, rng, 0.01, 1 * kDeg);
   const double delta = 0.2 * room_->host->truncation_m;
-  Tracker tracker(ctx(), TrackOptions{}, k.width, k.height);
-  for (int stride : {2, 3}) {  // (stride 1 is covered above; keeps sanitizer runs short)
-    SCOPED_TRACE("stride " + std::to_string(stride));
-    cv::Mat cost1, cost2;
-    accumulateReference(room_->host->view(), frame.vertex, cv::Mat(), stride, T1, delta, nullptr,
-                        &cost1);
-    const NormalEquations ref = accumulateReference(room_->host->view(), frame.vertex, cv::Mat(),
-                                                    stride, T2, delta, &cost1, &cost2);
-    tracker.evaluate(room_->device.view, vertex.get(), nullptr, T1, stride);
-    const NormalEquations dev =
-        tracker.evaluate(room_->device.view, vertex.get(), nullptr, T2, stride, true);
-    const cv::Mat dev_cost2 = tracker.lastPixelCosts();
-    int compared = 0;
-    for (int v = 0; v < k.height; v += stride) {
-      for (int u = 0; u < k.width; u += stride) {
-        const float r = cost2.at<float>(v, u), d = dev_cost2.at<float>(v, u);
-        ASSERT_EQ(std::isnan(r), std::isnan(d)) << u << "," << v;
-        if (std::isnan(r)) continue;
-        ASSERT_NEAR(d, r, kDeviceVsReferenceRelTolerance * std::abs(r) + kPixelCostTolerance)
-            << u << "," << v;
-        ++compared;
+  const test::HostVolume uneven = unevenWeights(*room_->host);
+  const test::DeviceVolume uneven_device = test::upload(ctx(), uneven);
+  double change_by_rule[2] = {};
+  for (const bool fixed : {false, true}) {
+    TrackOptions options;
+    options.step_acceptance = fixed ? "fixed_weights" : "cost";
+    Tracker tracker(ctx(), options, k.width, k.height);
+    for (int stride : {2, 3}) {  // (stride 1 is covered above; keeps sanitizer runs short)
+      SCOPED_TRACE(options.step_acceptance + ", stride " + std::to_string(stride));
+      cv::Mat cost1, cost2;
+      accumulateReference(uneven.view(), frame.vertex, cv::Mat(), stride, T1, delta, nullptr,
+                          &cost1, 0.0, fixed);
+      const NormalEquations ref = accumulateReference(
+          uneven.view(), frame.vertex, cv::Mat(), stride, T2, delta, &cost1, &cost2, 0.0, fixed);
+      tracker.evaluate(uneven_device.view, vertex.get(), nullptr, T1, stride);
+      const NormalEquations dev =
+          tracker.evaluate(uneven_device.view, vertex.get(), nullptr, T2, stride, true);
+      const cv::Mat dev_cost2 = tracker.lastPixelCosts();
+      ASSERT_EQ(dev_cost2.type(), CV_32FC2);
+      int compared = 0;
+      for (int v = 0; v < k.height; v += stride) {
+        for (int u = 0; u < k.width; u += stride) {
+          const cv::Vec2f r = cost2.at<cv::Vec2f>(v, u), d = dev_cost2.at<cv::Vec2f>(v, u);
+          ASSERT_EQ(std::isnan(r[0]), std::isnan(d[0])) << u << "," << v;
+          if (std::isnan(r[0])) continue;
+          ASSERT_NEAR(d[0], r[0],
+                      kDeviceVsReferenceRelTolerance * std::abs(r[0]) + kPixelCostTolerance)
+              << u << "," << v;
+          ASSERT_NEAR(d[1], r[1], kPixelWeightRelTolerance * std::abs(r[1])) << u << "," << v;
+          ++compared;
+        }
       }
+      EXPECT_GT(compared, 1000);
+      EXPECT_GT(ref.common, ref.valid * 9 / 10);
+      EXPECT_NEAR(dev.common, ref.common, kCountTolerance);
+      // The change is a small difference of large sums: relative to the cost itself.
+      EXPECT_NEAR(dev.cost_change, ref.cost_change, kDeviceVsReferenceRelTolerance * ref.cost);
+      EXPECT_GT(std::abs(ref.cost_change), 100 * kDeviceVsReferenceRelTolerance * ref.cost);
+      if (stride == 2) change_by_rule[fixed ? 1 : 0] = ref.cost_change;
     }
-    EXPECT_GT(compared, 1000);
-    EXPECT_GT(ref.common, ref.valid * 9 / 10);
-    EXPECT_NEAR(dev.common, ref.common, kCountTolerance);
-    // The change is a small difference of large sums: relative to the cost itself.
-    EXPECT_NEAR(dev.cost_change, ref.cost_change, kDeviceVsReferenceRelTolerance * ref.cost);
-    EXPECT_GT(std::abs(ref.cost_change), 100 * kDeviceVsReferenceRelTolerance * ref.cost);
   }
+  // The rules differ here (W moves with the pose), so the comparison above tells them apart.
+  EXPECT_GT(std::abs(change_by_rule[1] - change_by_rule[0]), 0.01 * std::abs(change_by_rule[0]));
+}
+
+TEST_F(TrackerTest, FixedWeightsAcceptanceAgreesWithTheModelOnSmallSteps) {
+  // LM predicts a step's decrease from g (weights c = q W held constant). For a small step the
+  // fixed-weights change is -g.h to first order whatever W does; the cost change also moves
+  // with W(p), so its gain (actual / predicted) falls below 1 on a map of uneven weight.
+  const io::Intrinsics& k = room_->intrinsics;
+  const PreprocessedFrame frame = preprocessReference(room_->depth, k, PreprocessOptions{});
+  std::mt19937 rng(23);
+  const Eigen::Isometry3d T = perturb(room_->T_volume_camera_gt, rng, 0.05, 5 * kDeg);
+  const double delta = 0.2 * room_->host->truncation_m;
+  const test::HostVolume uneven = unevenWeights(*room_->host);
+  double gain[2] = {};
+  for (const bool fixed : {false, true}) {
+    cv::Mat cost_at_T;
+    const NormalEquations at_T = accumulateReference(uneven.view(), frame.vertex, cv::Mat(), 2, T,
+                                                     delta, nullptr, &cost_at_T, 0.0, fixed);
+    const Vector6d h = -1e-4 * at_T.g.normalized();  // 0.1 mm / 0.1 mrad along -g
+    const NormalEquations moved =
+        accumulateReference(uneven.view(), frame.vertex, cv::Mat(), 2, applyLeftIncrement(h, T),
+                            delta, &cost_at_T, nullptr, 0.0, fixed);
+    const double predicted = at_T.g.dot(h);  // first-order change (negative)
+    ASSERT_LT(predicted, 0.0);
+    gain[fixed ? 1 : 0] = moved.cost_change / predicted;
+  }
+  EXPECT_NEAR(gain[1], 1.0, kFirstOrderGainTolerance);
+  EXPECT_LT(gain[0], 1.0 - 3 * kFirstOrderGainTolerance);
 }
 
 TEST_F(TrackerTest, PointJacobianMatchesFiniteDifferences) {
