@@ -20,12 +20,13 @@
 //      loss rule's count; the cost keeps delta)
 //   30 input pixels (valid vertex and q > 0)          31 max W over valid samples (a max)
 //   32 sum over pixels valid now and in `prev_cost` of (c' rho(r) - prev_cost), c' = c, or
-//      with fixed_weights the previous pose's c (prev_cost.y)
+//      with fixed_weights the previous pose's c (prev_weight)
 //   33 number of those pixels                         34 strict inliers (|r| <= delta)
-// Every sampled pixel's own cost c rho(r) and weight c (cost NaN when not valid) are written to
-// pixel_cost, so that the next evaluation can compare costs over the pixels valid at both
-// poses (points entering or leaving the observed map would otherwise make E jump between
-// poses). compare = 0: prev_cost is not read (first evaluation of a level).
+// Every sampled pixel's own cost c rho(r) (NaN when not valid) is written to pixel_cost, and
+// with fixed_weights its weight c to pixel_weight, so that the next evaluation can compare
+// costs over the pixels valid at both poses (points entering or leaving the observed map would
+// otherwise make E jump between poses). compare = 0: prev_cost is not read (first evaluation
+// of a level).
 #include "common.clh"
 #include "voxel_access.clh"
 
@@ -70,9 +71,9 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
     __global const float4* vertex, __global const float* q, const int width, const int height,
     const int stride, const float4 r0, const float4 r1, const float4 r2, __global const int* index,
     const int4 dims, __global const short2* voxels, const float voxel_size, const float truncation,
-    const float huber_delta, const float inlier_noise, __global const float2* prev_cost,
-    __global float2* pixel_cost, const int compare, const int fixed_weights,
-    __global float* partials) {
+    const float huber_delta, const float inlier_noise, __global const float* prev_cost,
+    __global float* pixel_cost, __global const float* prev_weight, __global float* pixel_weight,
+    const int compare, const int fixed_weights, __global float* partials) {
   // Term t of item k, its 16 lanes (pixels) folded to 8 (lanes l and l + 8 added):
   // shared[t * TRACK_ITEMS + k]. 35 x 16 float8 = 17.5 KiB of local memory (OpenCL 1.2
   // guarantees 32 KiB; unfolded float16, 35 KiB, did not fit there).
@@ -86,21 +87,25 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
   const int16 in_grid = (su < sw) & (int16)(sv < sh ? -1 : 0);
   // Pixel of each lane (0 outside the sampled grid, so that every read stays valid).
   const int16 pix = in_grid ? sv * stride * width + su * stride : 0;
-  float16 px, py, pz, pw, qu, prev, prev_c;
-#define TRACK_LOAD(l)                      \
-  {                                        \
-    const float4 p = vertex[pix.s##l];     \
-    px.s##l = p.x;                         \
-    py.s##l = p.y;                         \
-    pz.s##l = p.z;                         \
-    pw.s##l = p.w;                         \
-    qu.s##l = q[pix.s##l];                 \
-    const float2 pc = prev_cost[pix.s##l]; \
-    prev.s##l = pc.x;                      \
-    prev_c.s##l = pc.y;                    \
+  float16 px, py, pz, pw, qu, prev, prev_c = 0.0f;
+#define TRACK_LOAD(l)                  \
+  {                                    \
+    const float4 p = vertex[pix.s##l]; \
+    px.s##l = p.x;                     \
+    py.s##l = p.y;                     \
+    pz.s##l = p.z;                     \
+    pw.s##l = p.w;                     \
+    qu.s##l = q[pix.s##l];             \
+    prev.s##l = prev_cost[pix.s##l];   \
   }
   EMF_LANES16(TRACK_LOAD)
 #undef TRACK_LOAD
+  // The weights only with fixed_weights (the camera's evaluation keeps its memory traffic).
+#define TRACK_LOAD_WEIGHT(l) prev_c.s##l = prev_weight[pix.s##l];
+  if (fixed_weights) {
+    EMF_LANES16(TRACK_LOAD_WEIGHT)
+  }
+#undef TRACK_LOAD_WEIGHT
   const int16 input = in_grid & (pw > 0.0f) & (qu > 0.0f);
   const float16 x = r0.x * px + r0.y * py + r0.z * pz + r0.w;
   const float16 y = r1.x * px + r1.y * py + r1.z * pz + r1.w;
@@ -118,9 +123,15 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
   const float16 cost = c * rho;
   const float16 own_cost = valid ? cost : NAN;
 #define TRACK_STORE(l) \
-  if (in_grid.s##l) pixel_cost[pix.s##l] = (float2)(own_cost.s##l, c.s##l);
+  if (in_grid.s##l) pixel_cost[pix.s##l] = own_cost.s##l;
   EMF_LANES16(TRACK_STORE)
 #undef TRACK_STORE
+#define TRACK_STORE_WEIGHT(l) \
+  if (in_grid.s##l) pixel_weight[pix.s##l] = c.s##l;
+  if (fixed_weights) {
+    EMF_LANES16(TRACK_STORE_WEIGHT)
+  }
+#undef TRACK_STORE_WEIGHT
   const int16 common = valid & (int16)(compare ? -1 : 0) & !isnan(prev);
   const float16 hw = c * (inlier ? 1.0f : huber_delta / abs_r);
   const float16 j0 = valid ? gx : 0.0f, j1 = valid ? gy : 0.0f, j2 = valid ? gz : 0.0f;

@@ -241,8 +241,9 @@ Tracker::Tracker(cl::Context& ctx, const TrackOptions& options, int width, int h
   reduced_ = ctx_.buffer(CL_MEM_READ_WRITE, sizeof(float) * kTerms);
   const std::vector<float> ones(static_cast<size_t>(width) * height, 1.0f);
   ones_ = ctx_.buffer(CL_MEM_READ_ONLY, ones.size() * sizeof(float), ones.data());
-  for (auto& c : costs_) {
-    c = ctx_.buffer(CL_MEM_READ_WRITE, ones.size() * 2 * sizeof(float));
+  for (int i = 0; i < 2; ++i) {
+    costs_[i] = ctx_.buffer(CL_MEM_READ_WRITE, ones.size() * sizeof(float));
+    weights_[i] = ctx_.buffer(CL_MEM_READ_WRITE, ones.size() * sizeof(float));
   }
   host_partials_.resize(static_cast<size_t>(kTerms) * max_groups);
 }
@@ -273,8 +274,13 @@ NormalEquations Tracker::evaluate(const map::VolumeDeviceView& volume, cl_mem ve
 }
 
 cv::Mat Tracker::lastPixelCosts() const {
-  cv::Mat out(height_, width_, CV_32FC2);
-  ctx_.read(costs_[current_], out.ptr<float>(0), out.total() * 2 * sizeof(float));
+  cv::Mat cost(height_, width_, CV_32F), weight(height_, width_, CV_32F, cv::Scalar(0));
+  ctx_.read(costs_[current_], cost.ptr<float>(0), cost.total() * sizeof(float));
+  if (options_.step_acceptance == "fixed_weights") {
+    ctx_.read(weights_[current_], weight.ptr<float>(0), weight.total() * sizeof(float));
+  }
+  cv::Mat out;
+  cv::merge(std::vector<cv::Mat>{cost, weight}, out);
   return out;
 }
 
@@ -299,7 +305,8 @@ NormalEquations Tracker::evaluateCandidate(const map::VolumeDeviceView& volume, 
   cl::setArgs(accumulate_, vertex_map, q ? q : ones_.get(), width_, height_, stride, rows[0],
               rows[1], rows[2], volume.index, dims, volume.voxels, volume.voxel_size_m,
               volume.truncation_m, delta, static_cast<cl_float>(options_.inlier_noise_per_m2),
-              costs_[current_].get(), costs_[1 - current_].get(), compare ? 1 : 0,
+              costs_[current_].get(), costs_[1 - current_].get(), weights_[current_].get(),
+              weights_[1 - current_].get(), compare ? 1 : 0,
               static_cast<cl_int>(options_.step_acceptance == "fixed_weights"), partials_.get());
   const int sw = (width_ + stride - 1) / stride;
   const int sh = (height_ + stride - 1) / stride;

@@ -138,8 +138,8 @@ class Tracker {
                            const Eigen::Isometry3d& T_volume_camera, int stride,
                            bool compare_with_last = false);
   /// Per-pixel (cost, weight c) of the last evaluate() call (CV_32FC2; cost NaN where the sample
-  /// was not valid; pixels not sampled at that stride keep stale values). Blocking read; for
-  /// tests.
+  /// was not valid; weight 0 unless step_acceptance is fixed_weights; pixels not sampled at that
+  /// stride keep stale values). Blocking read; for tests.
   cv::Mat lastPixelCosts() const;
 
   /// True when the last track() call on the volume with this index buffer was lost.
@@ -181,7 +181,8 @@ class Tracker {
   cl::MemHandle partials_;
   cl::MemHandle reduced_;
   cl::MemHandle ones_;
-  cl::MemHandle costs_[2];  // per-pixel costs: accepted (current_) and candidate
+  cl::MemHandle costs_[2];    // per-pixel costs: accepted (current_) and candidate
+  cl::MemHandle weights_[2];  // per-pixel weights c, the same (step_acceptance fixed_weights)
   int current_ = 0;
   std::vector<float> host_partials_;
   std::vector<cl_mem> lost_volumes_;          // index buffers of volumes whose last call was lost
