@@ -166,14 +166,20 @@ cv::Mat creationMask(const cv::Mat& mask, const cv::Mat& vertex, const ObjectOpt
   cv::Mat smooth(mask.size(), CV_8U, cv::Scalar(0));
   const int du[4] = {1, -1, 0, 0};
   const int dv[4] = {0, 0, 1, -1};
+  // A mask pixel with valid depth: its depth and the largest depth step to a neighbour that
+  // still counts as the same surface.
+  const auto maskDepth = [&](int u, int v, double& z, double& jump) {
+    if (!(mask.at<float>(v, u) > 0.5f)) return false;
+    const cv::Vec4f& p = vertex.at<cv::Vec4f>(v, u);
+    if (p[3] == 0.0f) return false;
+    z = p[2];
+    jump = options.creation_depth_jump_m + options.creation_depth_jump_per_m2 * z * z;
+    return true;
+  };
   for (int v = 0; v < mask.rows; ++v) {
     for (int u = 0; u < mask.cols; ++u) {
-      if (!(mask.at<float>(v, u) > 0.5f)) continue;
-      const cv::Vec4f& p = vertex.at<cv::Vec4f>(v, u);
-      if (p[3] == 0.0f) continue;
-      const double z = p[2];
-      const double jump =
-          options.creation_depth_jump_m + options.creation_depth_jump_per_m2 * z * z;
+      double z = 0.0, jump = 0.0;
+      if (!maskDepth(u, v, z, jump)) continue;
       bool continuous = true;
       for (int k = 0; k < 4 && continuous; ++k) {
         const int uu = u + du[k], vv = v + dv[k];
@@ -203,12 +209,8 @@ cv::Mat creationMask(const cv::Mat& mask, const cv::Mat& vertex, const ObjectOpt
         out.at<float>(v, u) = mask.at<float>(v, u);
         continue;
       }
-      if (!(mask.at<float>(v, u) > 0.5f)) continue;
-      const cv::Vec4f& p = vertex.at<cv::Vec4f>(v, u);
-      if (p[3] == 0.0f) continue;
-      const double z = p[2];
-      const double jump =
-          options.creation_depth_jump_m + options.creation_depth_jump_per_m2 * z * z;
+      double z = 0.0, jump = 0.0;
+      if (!maskDepth(u, v, z, jump)) continue;
       for (int k = 0; k < 4; ++k) {
         const int uu = u + du[k], vv = v + dv[k];
         if (uu < 0 || vv < 0 || uu >= mask.cols || vv >= mask.rows) continue;

@@ -215,18 +215,28 @@ test::HostVolume unevenWeights(const test::HostVolume& volume) {
   return uneven;
 }
 
+/// The room's frame and its map with uneven weights: the case of the step-acceptance tests.
+struct UnevenWeightsCase {
+  PreprocessedFrame frame;
+  test::HostVolume volume;
+  double huber_delta;
+};
+
+UnevenWeightsCase unevenWeightsCase(const SyntheticWorld& room) {
+  return {preprocessReference(room.depth, room.intrinsics, PreprocessOptions{}),
+          unevenWeights(*room.host), 0.2 * room.host->truncation_m};
+}
+
 TEST_F(TrackerTest, CostChangeOverCommonPixelsMatchesReference) {
   // The step-acceptance terms: per-pixel costs and weights of one evaluation compared with the
   // next, for both acceptance rules (track.step_acceptance).
   const io::Intrinsics& k = room_->intrinsics;
-  const PreprocessedFrame frame = preprocessReference(room_->depth, k, PreprocessOptions{});
+  const auto [frame, uneven, delta] = unevenWeightsCase(*room_);
   cl::MemHandle vertex =
       ctx().buffer(CL_MEM_READ_ONLY, frame.vertex.total() * sizeof(cv::Vec4f), frame.vertex.data);
   std::mt19937 rng(22);
   const Eigen::Isometry3d T1 = perturb(room_->T_volume_camera_gt, rng, 0.03, 3 * kDeg);
   const Eigen::Isometry3d T2 = perturb(T1, rng, 0.01, 1 * kDeg);
-  const double delta = 0.2 * room_->host->truncation_m;
-  const test::HostVolume uneven = unevenWeights(*room_->host);
   const test::DeviceVolume uneven_device = test::upload(ctx(), uneven);
   double change_by_rule[2] = {};
   for (const bool fixed : {false, true}) {
@@ -277,12 +287,9 @@ TEST_F(TrackerTest, FixedWeightsAcceptanceAgreesWithTheModelOnSmallSteps) {
   // LM predicts a step's decrease from g (weights c = q W held constant). For a small step the
   // fixed-weights change is -g.h to first order whatever W does; the cost change also moves
   // with W(p), so its gain (actual / predicted) falls below 1 on a map of uneven weight.
-  const io::Intrinsics& k = room_->intrinsics;
-  const PreprocessedFrame frame = preprocessReference(room_->depth, k, PreprocessOptions{});
+  const auto [frame, uneven, delta] = unevenWeightsCase(*room_);
   std::mt19937 rng(23);
   const Eigen::Isometry3d T = perturb(room_->T_volume_camera_gt, rng, 0.05, 5 * kDeg);
-  const double delta = 0.2 * room_->host->truncation_m;
-  const test::HostVolume uneven = unevenWeights(*room_->host);
   double gain[2] = {};
   for (const bool fixed : {false, true}) {
     cv::Mat cost_at_T;
