@@ -225,6 +225,13 @@ cv::Mat creationMask(const cv::Mat& mask, const cv::Mat& vertex, const ObjectOpt
   return out;
 }
 
+double objectTruncation(const ObjectOptions& options, double map_truncation_voxels,
+                        double voxel_size_m, double pixel_footprint_m) {
+  const double wanted = std::max(options.truncation_voxels * voxel_size_m,
+                                 options.truncation_min_px * pixel_footprint_m);
+  return std::min(wanted, map_truncation_voxels * voxel_size_m);
+}
+
 int maskVisiblePixels(const cv::Mat& mask, const ObjectOptions& options) {
   const int b = options.visibility_border_px;
   if (mask.empty() || mask.cols <= 2 * b || mask.rows <= 2 * b) return 0;

@@ -84,6 +84,13 @@ int maskVisiblePixels(const cv::Mat& mask, const ObjectOptions& options);
 /// camera-frame vertex map (w = 0: invalid).
 cv::Mat creationMask(const cv::Mat& mask, const cv::Mat& vertex, const ObjectOptions& options);
 
+/// TSDF truncation (m) of a new object volume with voxels of `voxel_size_m` (beyond the paper,
+/// which truncates every volume at map_truncation_voxels): objects.truncation_voxels voxels, but
+/// at least objects.truncation_min_px pixel footprints (`pixel_footprint_m` = depth / fx at the
+/// object) and at most map_truncation_voxels voxels.
+double objectTruncation(const ObjectOptions& options, double map_truncation_voxels,
+                        double voxel_size_m, double pixel_footprint_m);
+
 /// All creation checks of step 5 for one unmatched detection. `reason` says which failed. Beyond
 /// the paper: a mask with fewer than objects.invisible_min_px visible pixels (maskVisiblePixels)
 /// creates nothing, since step 6 would delete the object as invisible in the next frame (a

@@ -9,7 +9,8 @@
 namespace emf::em {
 namespace {
 
-constexpr double kIoUGridTolerance = 0.02;  // boxIoU sampling error at n = 24
+constexpr double kIoUGridTolerance = 0.02;      // boxIoU sampling error at n = 24
+constexpr double kTruncationToleranceM = 1e-9;  // objectTruncation: exact arithmetic
 
 io::Detection detection(const std::string& cls, cv::Rect box, cv::Size image = {640, 480}) {
   io::Detection d;
@@ -196,6 +197,22 @@ TEST(ObjectRules, CreationMaskKeepsTheLargestContinuousPart) {
   // smaller part.
   EXPECT_EQ(cv::countNonZero(kept), 50 * 30);
   EXPECT_EQ(cv::countNonZero(kept(cv::Rect(10, 10, 50, 10))), 0);
+}
+
+TEST(ObjectRules, ObjectTruncationInVoxelsWithAPixelFloorAndTheMapsCap) {
+  ObjectOptions o;  // 5 voxels, at least 4 pixel footprints
+  const double map_voxels = 10.0;
+  // A car 2.3 m away with 1 cm voxels at 320x240 (fx 262.5: 0.88 cm per pixel): 5 voxels.
+  EXPECT_NEAR(objectTruncation(o, map_voxels, 0.01, 2.3 / 262.5), 0.05, kTruncationToleranceM);
+  // At 160x120 (1.75 cm per pixel) with 0.57 cm voxels: 4 footprints would be 7 cm, above the
+  // map's 10 voxels (5.7 cm), which cap it.
+  EXPECT_NEAR(objectTruncation(o, map_voxels, 0.0057, 2.3 / 131.25), 0.057, kTruncationToleranceM);
+  // Between the two: 1 cm voxels, 1.5 cm per pixel -> 4 footprints, 6 cm.
+  EXPECT_NEAR(objectTruncation(o, map_voxels, 0.01, 0.015), 0.06, kTruncationToleranceM);
+  // The paper's setting: truncation_voxels = map's, no pixel floor.
+  o.truncation_voxels = map_voxels;
+  o.truncation_min_px = 0.0;
+  EXPECT_NEAR(objectTruncation(o, map_voxels, 0.0057, 0.0175), 0.057, kTruncationToleranceM);
 }
 
 TEST(ObjectRules, CreationChecks) {
