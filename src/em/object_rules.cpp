@@ -249,7 +249,11 @@ int visiblePixels(const cv::Mat& object_ids, int object_id, const ObjectOptions&
 }
 
 bool isInvisible(const cv::Mat& object_ids, int object_id, const ObjectOptions& options) {
-  return visiblePixels(object_ids, object_id, options) < options.invisible_min_px;
+  const int inside = visiblePixels(object_ids, object_id, options);
+  if (inside >= options.invisible_min_px) return false;
+  if (options.invisible_inside_fraction <= 0.0 || inside == 0) return true;
+  const int rendered = cv::countNonZero(idMask(object_ids, object_id));
+  return inside < options.invisible_inside_fraction * rendered;
 }
 
 double meanAssociation(const cv::Mat& q, const cv::Mat& object_ids, int object_id) {

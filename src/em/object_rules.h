@@ -101,7 +101,9 @@ bool mayCreate(const io::Detection& d, const VolumePlacement& placement,
                const ObjectOptions& options, std::string* reason);
 
 /// Step 6: pixels of an object's rendered mask inside the image shrunk by
-/// objects.visibility_border_px; invisible when below objects.invisible_min_px.
+/// objects.visibility_border_px; invisible when below objects.invisible_min_px, unless (beyond
+/// the paper) at least objects.invisible_inside_fraction of the pixels it renders in the image
+/// lie inside that border: a small object in the middle of the view is not leaving it.
 int visiblePixels(const cv::Mat& object_ids, int object_id, const ObjectOptions& options);
 bool isInvisible(const cv::Mat& object_ids, int object_id, const ObjectOptions& options);
 

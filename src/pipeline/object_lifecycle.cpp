@@ -47,7 +47,7 @@ std::vector<Eigen::Vector3d> maskedPoints(const cv::Mat& vertex, const cv::Mat& 
 cv::Mat SlamSystem::downloadVertexMap() const {
   cv::Mat vertex(intrinsics_.height, intrinsics_.width, CV_32FC4);
   ctx_.read(
-      config_.objects.filter_depth ? preprocessor_.vertexMap() : raw_preprocessor_.vertexMap(),
+      config_.objects.filter_depth ? preprocessor_.vertexMap() : object_preprocessor_.vertexMap(),
       vertex.data, vertex.total() * sizeof(cv::Vec4f));
   return vertex;
 }
@@ -321,8 +321,8 @@ void SlamSystem::checkVisibility() {
                           std::to_string(opt.max_lost_frames) + "), its pose is stale");
       continue;
     }
-    const int visible = em::visiblePixels(last_ids_, o.id, opt);
-    if (visible < opt.invisible_min_px) {
+    if (em::isInvisible(last_ids_, o.id, opt)) {
+      const int visible = em::visiblePixels(last_ids_, o.id, opt);
       deleteObject(k, "invisible: " + std::to_string(visible) + " px < " +
                           std::to_string(opt.invisible_min_px) + " px");
       continue;

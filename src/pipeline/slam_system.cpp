@@ -43,7 +43,10 @@ track::TrackOptions objectTrackOptions(const track::TrackOptions& camera) {
 
 track::PreprocessOptions objectPreprocessOptions(const Config& config) {
   track::PreprocessOptions o = config.preprocess;
-  if (!config.objects.filter_depth) o.bilateral_radius_px = 0;
+  if (!config.objects.filter_depth) {
+    o.bilateral_radius_px = config.objects.depth_filter_radius_px;
+    o.sigma_depth_m = config.objects.depth_filter_sigma_m;
+  }
   return o;
 }
 
@@ -74,7 +77,7 @@ SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrins
       intrinsics_(intrinsics),
       pool_(std::make_unique<map::VoxelPool>(ctx, config.map)),
       preprocessor_(ctx, config.preprocess, intrinsics),
-      raw_preprocessor_(ctx, objectPreprocessOptions(config), intrinsics),
+      object_preprocessor_(ctx, objectPreprocessOptions(config), intrinsics),
       tracker_(ctx, config.track, intrinsics.width, intrinsics.height),
       object_tracker_(ctx, objectTrackOptions(config.track), intrinsics.width, intrinsics.height),
       estep_(ctx, config.em, intrinsics.width, intrinsics.height, 1 + config.objects.max_objects),
@@ -134,13 +137,13 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
   {
     ScopedStage s(timer_, "preprocess");
     preprocessor_.process(frame.depth);  // also keeps the raw depth on the device
-    // The raw vertex map only when the E-step or the object rules will read it this frame.
+    // The objects' vertex map only when the E-step or the object rules will read it this frame.
     const bool detector_due =
         scheduler_ != nullptr &&
         (scheduler_->async() || frame.index % config_.detector.every_n_frames == 0);
     if (!config_.objects.filter_depth &&
         (!objects_.empty() || detections != nullptr || detector_due)) {
-      raw_preprocessor_.process(frame.depth);
+      object_preprocessor_.process(frame.depth);
     }
     ctx_.finish();  // stage times include the device work
   }
@@ -220,7 +223,7 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
 
 cl_mem SlamSystem::objectVertexMap() const {
   return config_.objects.filter_depth ? preprocessor_.vertexMap().get()
-                                      : raw_preprocessor_.vertexMap().get();
+                                      : object_preprocessor_.vertexMap().get();
 }
 
 DetectorStats SlamSystem::detectorStats() const {

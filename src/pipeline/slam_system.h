@@ -186,7 +186,7 @@ class SlamSystem {
   std::unique_ptr<map::VoxelPool> pool_;
   std::unique_ptr<map::Volume> background_;
   track::Preprocessor preprocessor_;
-  track::Preprocessor raw_preprocessor_;  // objects.filter_depth off: no bilateral filter
+  track::Preprocessor object_preprocessor_;  // objects.filter_depth off: their own light filter
   track::Tracker tracker_;
   track::Tracker object_tracker_;  // objectTrackOptions(config.track)
   em::EStep estep_;

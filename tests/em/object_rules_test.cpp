@@ -269,7 +269,8 @@ TEST(ObjectRules, CreationChecks) {
 }
 
 TEST(ObjectRules, VisibilityIgnoresBorder) {
-  ObjectOptions o;  // 1600 px inside the image shrunk by 20 px
+  ObjectOptions o;                    // 1600 px inside the image shrunk by 20 px
+  o.invisible_inside_fraction = 0.0;  // the paper's rule
   cv::Mat ids = cv::Mat::zeros(480, 640, CV_16U);
   ids(cv::Rect(0, 0, 60, 60)).setTo(2);  // 3600 px, but only 40x40 = 1600 inside the border
   EXPECT_EQ(visiblePixels(ids, 2, o), 1600);
@@ -279,6 +280,30 @@ TEST(ObjectRules, VisibilityIgnoresBorder) {
   EXPECT_EQ(visiblePixels(ids, 2, o), 1560);
   EXPECT_TRUE(isInvisible(ids, 2, o));
   EXPECT_TRUE(isInvisible(ids, 7, o));  // not rendered at all
+}
+
+TEST(ObjectRules, SmallObjectInsideTheBorderStaysVisible) {
+  ObjectOptions o;  // 1600 px, 20 px border, inside fraction 0.9
+  ASSERT_GT(o.invisible_inside_fraction, 0.0);
+  cv::Mat ids = cv::Mat::zeros(480, 640, CV_16U);
+  ids(cv::Rect(300, 200, 20, 20)).setTo(3);  // 400 px, all inside: small, not leaving
+  EXPECT_EQ(visiblePixels(ids, 3, o), 400);
+  EXPECT_FALSE(isInvisible(ids, 3, o));
+  ids.setTo(0);
+  ids(cv::Rect(10, 200, 20, 20)).setTo(3);  // half in the border band: 200 of 400 inside
+  EXPECT_EQ(visiblePixels(ids, 3, o), 200);
+  EXPECT_TRUE(isInvisible(ids, 3, o));
+  ids.setTo(0);
+  ids(cv::Rect(18, 200, 20, 20)).setTo(3);  // 2 of 20 columns in the band: 360 of 400 = 0.9
+  EXPECT_FALSE(isInvisible(ids, 3, o));
+  ids.setTo(0);
+  ids(cv::Rect(17, 200, 20, 20)).setTo(3);  // 3 columns: 340 of 400 = 0.85 < 0.9
+  EXPECT_TRUE(isInvisible(ids, 3, o));
+  EXPECT_TRUE(isInvisible(ids, 7, o));  // not rendered at all
+  o.invisible_inside_fraction = 0.0;    // the paper: small is invisible
+  ids.setTo(0);
+  ids(cv::Rect(300, 200, 20, 20)).setTo(3);
+  EXPECT_TRUE(isInvisible(ids, 3, o));
 }
 
 TEST(ObjectRules, MeanAssociationOverMask) {
