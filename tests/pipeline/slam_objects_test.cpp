@@ -27,10 +27,10 @@ constexpr double kTruncationRotationGain = 0.8;
 // Whole system, 90 frames of `cars` at 320x240 with the simulated detector every 30 frames.
 constexpr double kCameraAteM = 0.01;  // measured 1.8 mm
 // Object ATE measured 2.6 / 2.2 cm (3.4 / 4.7 cm with the paper's object truncation and the raw
-// depth); car 2 moved
-// between 4.4 and 5.4 cm with the float summation order of the tracking kernel (work-group shapes),
-// so the bound leaves room for other CPUs. (Issue target 1.5 cm: not met; with perfect association
-// and a ground-truth-posed object map the noise floor of this preset is already 1.5 cm at 640x480.)
+// depth, when car 2 moved between 4.4 and 5.4 cm with the float summation order of the tracking
+// kernel, i.e. its work-group shapes), so the bound leaves room for other CPUs. (Issue target
+// 1.5 cm: not met; with perfect association and a ground-truth-posed object map the noise floor
+// of this preset is already 1.5 cm at 640x480.)
 constexpr double kObjectAteM = 0.06;
 constexpr double kObjectCoverage = 0.8;  // fraction of frames an object is tracked
 
