@@ -73,8 +73,9 @@ struct FrameOutcome {
 /// The preprocessing of the depth the E-step and the objects use (objects.filter_depth).
 track::PreprocessOptions objectPreprocessOptions(const Config& config);
 
-/// The tracking options for object volumes derived from the camera's (track section).
-track::TrackOptions objectTrackOptions(const track::TrackOptions& camera);
+/// The tracking options for object volumes: the camera's (track section) with the object rules
+/// below and objects.huber_truncation_factor.
+track::TrackOptions objectTrackOptions(const Config& config);
 
 /// The device view of a volume that tracking and the E-step read.
 map::VolumeDeviceView deviceView(const map::Volume& volume);
@@ -188,7 +189,7 @@ class SlamSystem {
   track::Preprocessor preprocessor_;
   track::Preprocessor object_preprocessor_;  // objects.filter_depth off: their own light filter
   track::Tracker tracker_;
-  track::Tracker object_tracker_;  // objectTrackOptions(config.track)
+  track::Tracker object_tracker_;  // objectTrackOptions(config)
   em::EStep estep_;
   map::RayCaster raycaster_;
   cl::MemHandle fg_mask_;      // p_fg of the matched detection per pixel (count updates)

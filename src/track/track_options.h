@@ -29,8 +29,13 @@ struct TrackOptions {
   double lm_tau = 1e3;
   double lm_eps = 1e-8;
   double lm_nu = 2.0;
-  /// Huber threshold as a fraction of the truncation distance (0.2 x 10 voxels = 2 voxels).
-  double huber_truncation_factor = 0.2;
+  /// Huber threshold as a fraction of the truncation distance: 0.05 x 10 voxels = half a voxel
+  /// (the paper: 0.2 = 2 voxels). A tighter delta bounds the pull of surfaces the map does not
+  /// explain, such as a mover no detector has found yet. bench/slam_bench, 300 frames, ATE at
+  /// 0.2 / 0.1 / 0.05 / 0.025: synthetic room 640x480 0.518 / 0.516 / 0.487 / 0.687 cm, 320x240
+  /// 0.988 / 0.854 / 0.843 cm; redkitchen 640x480 2.250 / 2.229 / 2.214 / 2.217 cm, 320x240
+  /// 2.156 / 2.166 / 2.171 cm. Objects have their own (objects.huber_truncation_factor).
+  double huber_truncation_factor = 0.05;
 
   // Speed (bench/track_bench measures these against the paper's settings above). Camera
   // defaults from bench/slam_bench on redkitchen, 300 frames (quiet machine): ATE 2.155 cm at
@@ -82,14 +87,18 @@ struct TrackOptions {
   /// below. 0.75: real frames tracked correctly show >= 0.85 (redkitchen-0-299), frames integrated
   /// 4-9 cm / 6-9 deg off on tum-fr3-cabinet-keyframes 0.65-0.71.
   double min_inlier_ratio = 0.75;
-  /// Inlier radius of the loss rules: a point is an inlier when |psi| <= max(Huber delta,
+  /// The loss rules' inlier delta as a fraction of the truncation: the paper's Huber delta, 0.2
+  /// (2 voxels), on which the ratios here were set. It is separate from huber_truncation_factor,
+  /// so that a tighter Huber delta does not change which frames are called lost.
+  double inlier_truncation_factor = 0.2;
+  /// Inlier radius of the loss rules: a point is an inlier when |psi| <= max(inlier delta,
   /// inlier_noise_per_m2 * z^2), z its depth (metres). The depth noise of triangulating sensors
   /// grows with z^2 (Kinect v1 and its synthetic model: sigma ~ 0.0018 z^2 with the disparity
   /// quantisation, 1.6 cm at 3 m), so beyond ~2 m a fixed 2 cm delta (1 cm voxels) counts
   /// correctly tracked points as outliers: the occlusion preset at 640x480, 3 m away, showed
   /// inlier ratios 0.68-0.72 on frames tracked to 0.7 cm and lost 29 of 30. 0.005 is ~2 sigma of
   /// the residual between two such measurements; it changes nothing nearer than 2 m at 1 cm voxels
-  /// (2.8 m at 2 cm). 0 = the Huber delta only. Only the count changes, not the cost.
+  /// (2.8 m at 2 cm). 0 = the inlier delta only. Only the count changes, not the cost.
   double inlier_noise_per_m2 = 0.005;
   /// After a lost call on a volume, its next calls must reach this inlier ratio until one is
   /// not lost: there is no relocalisation, so a pose re-acquired near the last good one after
@@ -138,8 +147,10 @@ struct TrackOptions {
            "lost below this fraction of depth pixels landing on the observed map");
     b.real("min_inlier_ratio", min_inlier_ratio, 0.0, 1.0, "",
            "lost below this fraction of map points within the inlier radius");
+    b.real("inlier_truncation_factor", inlier_truncation_factor, 0.0, 10.0, "truncation",
+           "loss rules: inlier delta as a fraction of the truncation (strict inliers within it)");
     b.real("inlier_noise_per_m2", inlier_noise_per_m2, 0.0, 1.0, "m/m^2",
-           "loss rules: inlier radius max(Huber delta, this x depth^2) (depth noise; 0 = delta)");
+           "loss rules: inlier radius max(inlier delta, this x depth^2) (depth noise; 0 = delta)");
     b.real("recovery_min_inlier_ratio", recovery_min_inlier_ratio, 0.0, 1.0, "",
            "after a lost frame: lost below this inlier ratio until a frame is tracked again");
     b.real("min_inverse_condition", min_inverse_condition, 0.0, 1.0, "",

@@ -99,7 +99,8 @@ NormalEquations accumulateReference(const map::VolumeHostView& volume, const cv:
                                     const cv::Mat& q, int stride,
                                     const Eigen::Isometry3d& T_volume_camera, double huber_delta_m,
                                     const cv::Mat* prev_cost, cv::Mat* pixel_cost,
-                                    double inlier_noise_per_m2, bool fixed_weights) {
+                                    double inlier_noise_per_m2, bool fixed_weights,
+                                    double inlier_delta_m) {
   if (vertex.type() != CV_32FC4 || (!q.empty() && (q.type() != CV_32F || q.size != vertex.size))) {
     throw InvalidArgument(
         "accumulateReference: vertex must be CV_32FC4 and q empty or CV_32F of the same size");
@@ -116,6 +117,8 @@ NormalEquations accumulateReference(const map::VolumeHostView& volume, const cv:
   double t[kTerms] = {};
   const Eigen::Matrix4f M = T_volume_camera.matrix().cast<float>();
   const double delta = static_cast<float>(huber_delta_m);
+  const float inlier_delta =
+      static_cast<float>(inlier_delta_m < 0.0 ? huber_delta_m : inlier_delta_m);
   for (int v = 0; v < vertex.rows; v += stride) {
     for (int u = 0; u < vertex.cols; u += stride) {
       const cv::Vec4f p = vertex.at<cv::Vec4f>(v, u);
@@ -133,11 +136,10 @@ NormalEquations accumulateReference(const map::VolumeHostView& volume, const cv:
       const double r = psi, abs_r = std::abs(r);
       const bool inlier = abs_r <= delta;
       const double c = static_cast<double>(qu) * weight;
-      const float inlier_radius =
-          std::max(static_cast<float>(delta),
-                   static_cast<float>(inlier_noise_per_m2) * p[2] * p[2]);  // as the kernel
+      const float inlier_radius = std::max(
+          inlier_delta, static_cast<float>(inlier_noise_per_m2) * p[2] * p[2]);  // as the kernel
       t[kInliers] += abs_r <= inlier_radius ? 1.0 : 0.0;
-      t[kStrictInliers] += inlier ? 1.0 : 0.0;
+      t[kStrictInliers] += abs_r <= inlier_delta ? 1.0 : 0.0;
       const double rho = inlier ? 0.5 * r * r : delta * (abs_r - 0.5 * delta);
       const double cost = c * rho;
       t[kCost] += cost;
@@ -302,12 +304,15 @@ NormalEquations Tracker::evaluateCandidate(const map::VolumeDeviceView& volume, 
   dims.s[2] = volume.dims_blocks.z();
   dims.s[3] = 0;
   const float delta = static_cast<float>(options_.huber_truncation_factor * volume.truncation_m);
+  const float inlier_delta =
+      static_cast<float>(options_.inlier_truncation_factor * volume.truncation_m);
   cl::setArgs(accumulate_, vertex_map, q ? q : ones_.get(), width_, height_, stride, rows[0],
               rows[1], rows[2], volume.index, dims, volume.voxels, volume.voxel_size_m,
-              volume.truncation_m, delta, static_cast<cl_float>(options_.inlier_noise_per_m2),
-              costs_[current_].get(), costs_[1 - current_].get(), weights_[current_].get(),
-              weights_[1 - current_].get(), compare ? 1 : 0,
-              static_cast<cl_int>(options_.step_acceptance == "fixed_weights"), partials_.get());
+              volume.truncation_m, delta, inlier_delta,
+              static_cast<cl_float>(options_.inlier_noise_per_m2), costs_[current_].get(),
+              costs_[1 - current_].get(), weights_[current_].get(), weights_[1 - current_].get(),
+              compare ? 1 : 0, static_cast<cl_int>(options_.step_acceptance == "fixed_weights"),
+              partials_.get());
   const int sw = (width_ + stride - 1) / stride;
   const int sh = (height_ + stride - 1) / stride;
   cl::enqueue(ctx_.queue(), accumulate_, static_cast<size_t>((sw + kLanes - 1) / kLanes),
@@ -485,7 +490,8 @@ TrackResult Tracker::track(const map::VolumeDeviceView& volume, cl_mem vertex_ma
              result.strict_inlier_ratio < recoveryInlierRatio(volume.index)) {
     result.loss = TrackLoss::kFewInliers;
     why << "recovering after a lost frame: inlier ratio " << result.strict_inlier_ratio << " ("
-        << ne.strict_inliers << " of " << ne.valid << " points within the Huber delta) is below "
+        << ne.strict_inliers << " of " << ne.valid
+        << " points within track.inlier_truncation_factor of the truncation) is below "
         << recoveryInlierRatio(volume.index) << " (track.recovery_min_inlier_ratio "
         << options_.recovery_min_inlier_ratio << ", at most the volume's typical inlier ratio - "
         << kRecoveryMargin << ")";

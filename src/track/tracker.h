@@ -25,11 +25,12 @@
 //   valid / input < min_valid_fraction                 -> kFewValidPoints
 //   |T_init^-1 T| > max_motion_m or max_motion_deg     -> kLargeMotion
 //   inliers / valid < min_inlier_ratio                 -> kFewInliers
-//     (inlier: |r| <= max(Huber delta, inlier_noise_per_m2 z^2), the depth noise allowed for)
+//     (inlier: |r| <= max(inlier delta, inlier_noise_per_m2 z^2), the depth noise allowed for;
+//     inlier delta = inlier_truncation_factor x truncation, the paper's Huber delta)
 //   recovering and strict_inliers / valid < min(recovery_min_inlier_ratio, typical - 0.05)
 //                                                      -> kFewInliers
-//     (strict: |r| <= Huber delta; typical: running mean of the volume's tracked calls. There
-//     is no relocalisation, so a re-acquired pose must fit at the Huber delta: the wider
+//     (strict: |r| <= inlier delta; typical: running mean of the volume's tracked calls. There
+//     is no relocalisation, so a re-acquired pose must fit at the inlier delta: the wider
 //     radius let a pose 1.9 m / 89 deg off pass on tum-fr3-cabinet-keyframes)
 //   balancedInverseCondition(H) < min_inverse_condition -> kDegenerate
 //   finest level ended at max_iterations (lost_if_not_converged) -> kNotConverged
@@ -68,7 +69,7 @@ struct NormalEquations {
   /// that points entering or leaving the observed map do not make E jump.
   double cost_change = 0.0;
   int common = 0;
-  int strict_inliers = 0;  // valid samples with |r| <= delta (the recovery rule's count)
+  int strict_inliers = 0;  // valid samples with |r| <= inlier delta (the recovery rule's count)
 };
 
 /// CPU reference of the track_accumulate kernel (and its reduction), in double. `vertex`:
@@ -77,14 +78,16 @@ struct NormalEquations {
 /// weight c; cost NaN where invalid; optional) gives cost_change/common: the change of c rho(r)
 /// or, with fixed_weights, of rho(r) weighted by the previous c (TrackOptions::step_acceptance);
 /// `pixel_cost` (optional) receives each used pixel's (c rho(r), c) (cost NaN where not valid;
-/// other pixels untouched). A point counts as an inlier when |r| <= max(huber_delta_m,
-/// inlier_noise_per_m2 * z^2), z its camera-frame depth (TrackOptions::inlier_noise_per_m2).
+/// other pixels untouched). A point counts as an inlier when |r| <= max(inlier_delta_m,
+/// inlier_noise_per_m2 * z^2), z its camera-frame depth (TrackOptions::inlier_noise_per_m2), and
+/// as a strict inlier when |r| <= inlier_delta_m (TrackOptions::inlier_truncation_factor; < 0:
+/// the Huber delta).
 NormalEquations accumulateReference(const map::VolumeHostView& volume, const cv::Mat& vertex,
                                     const cv::Mat& q, int stride,
                                     const Eigen::Isometry3d& T_volume_camera, double huber_delta_m,
                                     const cv::Mat* prev_cost = nullptr,
                                     cv::Mat* pixel_cost = nullptr, double inlier_noise_per_m2 = 0.0,
-                                    bool fixed_weights = false);
+                                    bool fixed_weights = false, double inlier_delta_m = -1.0);
 
 /// Why a frame was declared lost (TrackResult::loss).
 enum class TrackLoss {
@@ -109,7 +112,7 @@ struct TrackResult {
   int input_pixels = 0;            // finest level: pixels with valid depth and q > 0
   double valid_fraction = 0;       // valid_pixels / input_pixels
   double inlier_ratio = 0;         // inliers / valid_pixels (depth-dependent inlier radius)
-  double strict_inlier_ratio = 0;  // strict_inliers / valid_pixels (|r| <= Huber delta)
+  double strict_inlier_ratio = 0;  // strict_inliers / valid_pixels (|r| <= inlier delta)
   double inverse_condition = 0;    // lambda_min / lambda_max of the balanced Hessian
   double motion_m = 0;             // |translation| of T_init^-1 T_final (camera frame), metres
   double motion_deg = 0;           // rotation angle of T_init^-1 T_final, degrees

@@ -1,4 +1,5 @@
 #include "pipeline/progress.h"
+#include "pipeline/slam_system.h"
 #include "pipeline/stage_timer.h"
 #include "test_support.h"
 
@@ -31,6 +32,22 @@ TEST(StageTimer, SummaryOfOddAndEmpty) {
 TEST(ProgressLine, FormatsRateAndEta) {
   EXPECT_EQ(Progress::format(50, 300, 10.0, ""), "frame 50/300  5.0 frames/s  ETA 00:50");
   EXPECT_EQ(Progress::format(30, -1, 2.0, "lost 1"), "frame 30  15.0 frames/s  lost 1");
+}
+
+TEST(ObjectTrackOptions, ObjectsKeepTheirOwnHuberDeltaAndRules) {
+  Config config;
+  config.track.huber_truncation_factor = 0.05;
+  config.objects.huber_truncation_factor = 0.2;
+  config.track.pixel_stride = 2;
+  const track::TrackOptions o = objectTrackOptions(config);
+  EXPECT_DOUBLE_EQ(o.huber_truncation_factor, 0.2);
+  EXPECT_DOUBLE_EQ(o.inlier_truncation_factor, config.track.inlier_truncation_factor);
+  EXPECT_EQ(o.pixel_stride, 1);
+  EXPECT_EQ(o.step_acceptance, "fixed_weights");
+  EXPECT_DOUBLE_EQ(o.min_valid_fraction, 0.0);
+  // The defaults: the camera's tight delta, the objects' the paper's.
+  EXPECT_LT(Config{}.track.huber_truncation_factor,
+            objectTrackOptions(Config{}).huber_truncation_factor);
 }
 
 }  // namespace
