@@ -72,9 +72,9 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
     const int stride, const float4 r0, const float4 r1, const float4 r2, __global const int* index,
     const int4 dims, __global const short2* voxels, const float voxel_size, const float truncation,
     const float huber_delta, const float inlier_delta, const float inlier_noise,
-    __global const float* prev_cost,
-    __global float* pixel_cost, __global const float* prev_weight, __global float* pixel_weight,
-    const int compare, const int fixed_weights, __global float* partials) {
+    __global const float* prev_cost, __global float* pixel_cost, __global const float* prev_weight,
+    __global float* pixel_weight, const int compare, const int fixed_weights,
+    __global float* partials) {
   // Term t of item k, its 16 lanes (pixels) folded to 8 (lanes l and l + 8 added):
   // shared[t * TRACK_ITEMS + k]. 35 x 16 float8 = 17.5 KiB of local memory (OpenCL 1.2
   // guarantees 32 KiB; unfolded float16, 35 KiB, did not fit there).
