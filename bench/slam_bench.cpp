@@ -222,6 +222,7 @@ struct ChildResult {
   int exit_code = -1;
   double peak_rss_mb = 0;
   double wall_s = 0;
+  double cpu_s = 0;  // user + system time of the child (all its threads)
 };
 
 /// Runs argv as a child process (stdout/stderr to `log`), returns its exit code and peak RSS.
@@ -249,6 +250,8 @@ ChildResult runChild(const std::vector<std::string>& argv, const std::string& lo
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   r.peak_rss_mb = ru.ru_maxrss / 1024.0;
   r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  r.cpu_s = static_cast<double>(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
+            1e-6 * static_cast<double>(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
   return r;
 }
 
@@ -355,6 +358,15 @@ int main(int argc, char** argv) {
                     fmt(s.at("p90_ms").get<double>()).c_str());
       }
       std::printf("\n");
+      // Work per frame: figures the machine's load does not change (and the child's CPU time,
+      // which other processes change less than the wall clock; it includes loading the images).
+      std::printf("       work (median / p90 per frame):");
+      for (const auto& [counter, c] : run.at("work_per_frame").items()) {
+        std::printf(" %s %s / %s", counter.c_str(), fmt(c.at("median").get<double>(), 1).c_str(),
+                    fmt(c.at("p90").get<double>(), 1).c_str());
+      }
+      std::printf("; process CPU %s ms/frame\n",
+                  fmt(1e3 * er.cpu_s / std::max<size_t>(1, e.poses)).c_str());
       for (const auto& l : run.at("lost")) {
         std::printf("       lost frame %lld: %s\n", l.at("index").get<long long>(),
                     l.at("reason").get<std::string>().c_str());

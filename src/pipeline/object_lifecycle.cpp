@@ -81,6 +81,7 @@ void SlamSystem::trackObjects(const std::vector<Eigen::Isometry3d>& T_oc_predict
         o.volume->T_world_volume().inverse() * T_world_camera_ * last_motion_.inverse();
     const track::TrackResult r = object_tracker_.track(
         deviceView(*o.volume), vertex, estep_.q(o.e_step_slot).get(), T_oc_predicted[k]);
+    counters_.add("object_track_iterations", r.iterations);
     logDebug("frame ", frames_, ": object ", o.id, ": ", r.iterations, " it, valid ",
              r.valid_pixels, "/", r.input_pixels, ", inliers ", r.inlier_ratio, ", motion ",
              r.motion_m, " m ", r.motion_deg, " deg", r.lost ? " LOST " + r.loss_reason : "");
@@ -116,7 +117,7 @@ void SlamSystem::integrateAll() {
     ctx_.write(new_weights_, w.data, w.total() * sizeof(float));
     in.weights = &new_weights_;
   }
-  background_->fuse(in);
+  counters_.add("integrated_blocks", background_->fuse(in).listed_blocks);
   for (TrackedObject& o : objects_) {
     if (o.state != ObjectState::kTracked || !have_q || o.first_frame == frames_) continue;
     map::IntegrationInput oi = in;
@@ -127,6 +128,7 @@ void SlamSystem::integrateAll() {
       oi.fg_mask = &fg_mask_;
     }
     const map::AllocationReport r = o.volume->fuse(oi);
+    counters_.add("integrated_blocks", r.listed_blocks);
     if (r.dropped_blocks > 0) {
       logWarning("frame ", frames_, ": object ", o.id, ": ", r.dropped_blocks,
                  " blocks found no slot (voxel pool full: raise map.memory_mb)");
@@ -298,6 +300,7 @@ bool SlamSystem::createObject(const io::Detection& d, const cv::Mat& vertex) {
   in.weights = &new_weights_;
   in.fg_mask = &fg_mask_;
   const map::AllocationReport r = o.volume->fuse(in);
+  counters_.add("integrated_blocks", r.listed_blocks);
   logInfo("frame ", frames_, ": object ", o.id, " ('", o.class_name,
           "') created: ", placement.resolution, "^3 voxels of ", placement.voxel_size_m * 100,
           " cm at (", placement.centre_world.transpose(), "), ", r.allocated_blocks, " blocks");

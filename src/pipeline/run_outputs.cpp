@@ -86,6 +86,12 @@ std::string runSummaryJson(const SlamSystem& slam, const cl::Context& ctx, const
                     {"count", s.count}};
   }
   j["ms_per_frame"] = stages;
+  nlohmann::json work;
+  for (const auto& [name, c] : slam.counters().summary()) {
+    work[name] = {
+        {"median", c.median}, {"p90", c.p90}, {"mean", c.mean}, {"max", c.max}, {"count", c.count}};
+  }
+  j["work_per_frame"] = work;
   const map::PoolStats pool = slam.pool().stats();
   j["memory"] = {{"pool_bytes", pool.pool_bytes},
                  {"pool_blocks", pool.capacity_slots},

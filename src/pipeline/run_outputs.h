@@ -43,7 +43,8 @@ nlohmann::json objectSummariesJson(const std::vector<ObjectSummary>& objects);
 /// run.json's "detector" object: the DetectorStats counters.
 nlohmann::json detectorStatsJson(const DetectorStats& stats);
 
-/// The run summary as JSON text (frames, lost frames, per-stage ms median/p90, memory, device,
+/// The run summary as JSON text (frames, lost frames, per-stage ms median/p90, work per frame
+/// (SlamSystem::counters: LM iterations, integrated blocks), memory, device,
 /// and when given: "objects" [{id, class, first_frame, last_frame, frames_tracked, ...,
 /// state alive|deleted, deleted_frame, deleted_reason}], "detector" counters, "error").
 std::string runSummaryJson(const SlamSystem& slam, const cl::Context& ctx, const RunInfo& info);

@@ -83,7 +83,8 @@ SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrins
       object_tracker_(ctx, objectTrackOptions(config), intrinsics.width, intrinsics.height),
       estep_(ctx, config.em, intrinsics.width, intrinsics.height, 1 + config.objects.max_objects),
       raycaster_(ctx, config.map, intrinsics.width, intrinsics.height),
-      timer_(stageNames(), 4096) {
+      timer_(stageNames(), 4096),
+      counters_({"track_iterations", "object_track_iterations", "integrated_blocks"}, 4096) {
   // Pixel thresholds of the object rules are given for 640x480 images: scale them.
   const double scale = intrinsics.width / 640.0;
   em::ObjectOptions& o = config_.objects;
@@ -169,6 +170,7 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
           background_->T_world_volume().inverse() * T_world_predicted;
       out.track = tracker_.track(deviceView(*background_), vertex,
                                  with_objects ? estep_.q(0).get() : nullptr, T_volume_init);
+      counters_.add("track_iterations", out.track.iterations);
     }
     if (out.track.lost) {
       out.lost = true;
@@ -218,6 +220,7 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
   }
   fillObjectOutcomes(&out);
   timer_.endFrame();
+  counters_.endFrame();
   ++frames_;
   return out;
 }

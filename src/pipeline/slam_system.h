@@ -24,6 +24,7 @@
 #include "map/volume_view.h"
 #include "map/voxel_pool.h"
 #include "pipeline/detector_scheduler.h"
+#include "pipeline/frame_counters.h"
 #include "pipeline/stage_timer.h"
 #include "track/preprocess.h"
 #include "track/tracker.h"
@@ -123,6 +124,9 @@ class SlamSystem {
   map::VoxelPool& pool() { return *pool_; }
   const map::VoxelPool& pool() const { return *pool_; }
   const StageTimer& timer() const { return timer_; }
+  /// Work per frame: "track_iterations" (the camera's LM iterations), "object_track_iterations"
+  /// (summed over objects), "integrated_blocks" (blocks integrated, all volumes).
+  const FrameCounters& counters() const { return counters_; }
   /// The detector's counters (plugin empty when none is configured).
   DetectorStats detectorStats() const;
   /// Objects alive now (as in the last FrameOutcome, without the deleted ones).
@@ -208,6 +212,7 @@ class SlamSystem {
   std::unique_ptr<map::SdfSampler> sdf_sampler_;
   cl::MemHandle probe_points_, probe_psi_, probe_weight_, probe_gradient_, probe_pfg_;
   StageTimer timer_;
+  FrameCounters counters_;
   Eigen::Isometry3d T_world_camera_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d last_motion_ = Eigen::Isometry3d::Identity();  // T_prev_curr of the last frame
   int64_t frames_ = 0;

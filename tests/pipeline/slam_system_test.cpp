@@ -3,6 +3,7 @@
 #include "pipeline/slam_system.h"
 
 #include <cmath>
+#include <vector>
 
 #include "io/frame_source.h"
 #include "test_support.h"
@@ -27,11 +28,28 @@ TEST(SlamSystem, LostFrameIsNotIntegratedAndPoseIsKept) {
   SlamSystem slam(ctx, config, src->intrinsics());
   io::Frame f;
   Eigen::Isometry3d T_gtworld_first = Eigen::Isometry3d::Identity();
+  std::vector<FrameOutcome> tracked;
   for (int i = 0; i < 10; ++i) {
     ASSERT_TRUE(src->next(f));
     if (i == 0) T_gtworld_first = *f.T_world_camera_gt;
-    ASSERT_FALSE(slam.process(f).lost);
+    tracked.push_back(slam.process(f));
+    ASSERT_FALSE(tracked.back().lost);
   }
+  // The work counters hold one sample per frame: the camera's LM iterations (none on the
+  // first frame, which is placed) and the blocks integrated (the background's listed blocks).
+  const auto& iterations = slam.counters().samples("track_iterations");
+  const auto& blocks = slam.counters().samples("integrated_blocks");
+  ASSERT_EQ(iterations.size(), 10u);
+  ASSERT_EQ(blocks.size(), 10u);
+  EXPECT_EQ(iterations[0], 0.0);
+  for (size_t i = 0; i < tracked.size(); ++i) {
+    if (i > 0) {
+      EXPECT_EQ(iterations[i], tracked[i].track.iterations) << "frame " << i;
+    }
+    EXPECT_GT(blocks[i], 0.0) << "frame " << i;
+    EXPECT_EQ(blocks[i], tracked[i].allocation.listed_blocks) << "frame " << i;
+  }
+  EXPECT_EQ(slam.counters().samples("object_track_iterations"), std::vector<double>(10, 0.0));
   const Eigen::Isometry3d before = slam.T_world_camera();
   const int used_before = slam.pool().stats().used_slots;
   // A frame of nothing but invalid depth: no evidence at all.
@@ -43,6 +61,9 @@ TEST(SlamSystem, LostFrameIsNotIntegratedAndPoseIsKept) {
   EXPECT_TRUE(lost.T_world_camera.isApprox(before, 1e-12));
   EXPECT_EQ(slam.pool().stats().used_slots, used_before);
   EXPECT_EQ(slam.framesLost(), 1);
+  // The lost frame tracked (its iterations count) but integrated nothing.
+  EXPECT_EQ(slam.counters().samples("track_iterations").back(), lost.track.iterations);
+  EXPECT_EQ(slam.counters().samples("integrated_blocks").back(), 0.0);
   // The next real frame tracks again.
   ASSERT_TRUE(src->next(f));
   const FrameOutcome back = slam.process(f);

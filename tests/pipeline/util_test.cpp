@@ -1,3 +1,4 @@
+#include "pipeline/frame_counters.h"
 #include "pipeline/progress.h"
 #include "pipeline/slam_system.h"
 #include "pipeline/stage_timer.h"
@@ -27,6 +28,26 @@ TEST(StageTimer, MedianP90AndTotal) {
 TEST(StageTimer, SummaryOfOddAndEmpty) {
   EXPECT_DOUBLE_EQ(summarize({3, 1, 2}).median_ms, 2.0);
   EXPECT_EQ(summarize({}).count, 0);
+}
+
+TEST(FrameCounters, SumsPerFrameAndSummarises) {
+  FrameCounters c({"iterations", "blocks"}, 4);
+  for (int i = 1; i <= 10; ++i) {
+    c.add("iterations", i);
+    c.add("iterations", 1);  // accumulates within a frame
+    if (i % 2 == 0) c.add("blocks", 100 * i);
+    c.endFrame();
+  }
+  const auto s = c.summary();
+  EXPECT_DOUBLE_EQ(s.at("iterations").median, 6.5);
+  EXPECT_DOUBLE_EQ(s.at("iterations").p90, 10.0);
+  EXPECT_DOUBLE_EQ(s.at("iterations").max, 11.0);
+  EXPECT_DOUBLE_EQ(s.at("blocks").mean, 300.0);  // untouched frames count as 0
+  EXPECT_EQ(s.at("blocks").count, 10);
+  EXPECT_EQ(c.samples("blocks")[0], 0.0);
+  EXPECT_EQ(c.samples("blocks")[1], 200.0);
+  EXPECT_THROW(c.add("nope", 1), InvalidArgument);
+  EXPECT_THROW(c.samples("nope"), InvalidArgument);
 }
 
 TEST(ProgressLine, FormatsRateAndEta) {
