@@ -23,14 +23,15 @@ inline bool emf_depth_in_range(float d, float min_depth, float max_depth) {
 // Sixteen horizontally adjacent pixels per work item (float16 arithmetic: PoCL does not
 // vectorise across work items here, so the SIMD is explicit; GPUs see 16 independent lanes).
 // The window radius is a build option (-DPRE_RADIUS=r, one cached program per radius).
-// Invalid or out-of-image neighbours are masked out of the sums. Global size:
+// Invalid or out-of-image neighbours (loaded as NaN) are masked out of the sums. Global size:
 // (ceil(width / 16), height).
 // The helpers are always inlined: a call in the tap loop makes every live vector spill.
 __attribute__((always_inline)) inline float16 emf_load16(__global const float* row, int u,
                                                          int width) {
   if (u >= 0 && u + 15 < width) return vload16(0, row + u);
+  // Lanes outside the row read NaN (invalid: masked out of the sums like a missing depth).
   float16 r;
-#define EMF_PRE_LOAD(l) r.s##l = row[clamp(u + 0x##l, 0, width - 1)];
+#define EMF_PRE_LOAD(l) r.s##l = (u + 0x##l >= 0 && u + 0x##l < width) ? row[u + 0x##l] : NAN;
   EMF_PRE_LANES16(EMF_PRE_LOAD)
 #undef EMF_PRE_LOAD
   return r;
@@ -75,6 +76,9 @@ __kernel void preprocess_depth(__global const float* depth_in, __global float* d
   const int16 lane = (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
   const float16 d0 = emf_load16(depth_in + v * width, u0, width);
   const int16 centre_valid = emf_in_range16(d0, min_depth, max_depth);
+  // d > 0 && d >= min_depth  <=>  d > above (floats: d >= m <=> d > the float below m), so a
+  // neighbour's range check is two comparisons (both false for NaN).
+  const float above = fmax(0.0f, nextafter(min_depth, -INFINITY));
   float16 sum_w = 0.0f;
   float16 sum_wd = 0.0f;
   for (int dv = -PRE_RADIUS; dv <= PRE_RADIUS; ++dv) {
@@ -83,8 +87,7 @@ __kernel void preprocess_depth(__global const float* depth_in, __global float* d
     __global const float* row = depth_in + vv * width;
     for (int du = -PRE_RADIUS; du <= PRE_RADIUS; ++du) {
       const float16 d = emf_load16(row, u0 + du, width);
-      const int16 uu = u0 + du + lane;
-      const int16 use = emf_in_range16(d, min_depth, max_depth) & (uu >= 0) & (uu < width);
+      const int16 use = (d > above) & (d <= max_depth);
       const float16 dd = d - d0;
       const float16 w = emf_exp_neg16(-(float)(du * du + dv * dv) * inv_two_sigma_space_sq -
                                       dd * dd * inv_two_sigma_depth_sq);

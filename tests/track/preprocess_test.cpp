@@ -103,6 +103,21 @@ cv::Mat constructedDepth(int w, int h) {
   d.at<float>(0, 0) = kNaN;                           // corner
   d.at<float>(h - 1, w - 1) = 7.0f;                   // beyond max
   d.at<float>(h / 2, 5) = 0.05f;                      // below min
+  // Exactly at the range limits (valid), the floats just outside them and a negative depth
+  // (invalid), each among valid neighbours a few mm away so that wrongly including one moves
+  // their filtered depth far beyond the tolerance. The kernel's neighbour test is
+  // d > (the float below min) && d <= max.
+  for (int v = 36; v <= 40; ++v) {
+    for (int u = 46; u < w; ++u) {
+      d.at<float>(v, u) = u < 58 ? 0.1005f + 0.0002f * static_cast<float>(u - 46)
+                                 : 4.999f - 0.0002f * static_cast<float>(u - 58);
+    }
+  }
+  d.at<float>(38, 50) = 0.1f;
+  d.at<float>(38, 52) = std::nextafter(0.1f, 0.0f);
+  d.at<float>(38, 54) = -1.0f;
+  d.at<float>(38, 61) = 5.0f;
+  d.at<float>(38, 63) = std::nextafter(5.0f, 6.0f);
   return d;
 }
 
@@ -118,6 +133,9 @@ TEST_F(Preprocess, ConstructedEdgesAndHolesMatchReference) {
   const cv::Mat depth = constructedDepth(w, h);
   PreprocessOptions o;
   compareWithReference(ctx(), depth, k, o);
+  o.min_depth_m = 0.0;  // no minimum: only d > 0 is valid
+  compareWithReference(ctx(), depth, k, o);
+  o.min_depth_m = PreprocessOptions().min_depth_m;
   o.bilateral_radius_px = 0;  // filter off: back-projection only
   compareWithReference(ctx(), depth, k, o);
   o.bilateral_radius_px = 5;
@@ -145,6 +163,11 @@ TEST(PreprocessReference, SemanticsOnConstructedDepth) {
   EXPECT_TRUE(std::isnan(out.depth_m.at<float>(h - 1, w - 1)));
   EXPECT_TRUE(std::isnan(out.depth_m.at<float>(h / 2, 5)));
   EXPECT_EQ(out.vertex.at<cv::Vec4f>(12, 12)[3], 0.0f);
+  EXPECT_FALSE(std::isnan(out.depth_m.at<float>(38, 50))) << "exactly min_depth is valid";
+  EXPECT_TRUE(std::isnan(out.depth_m.at<float>(38, 52))) << "just below min_depth";
+  EXPECT_TRUE(std::isnan(out.depth_m.at<float>(38, 54))) << "negative depth";
+  EXPECT_FALSE(std::isnan(out.depth_m.at<float>(38, 61))) << "exactly max_depth is valid";
+  EXPECT_TRUE(std::isnan(out.depth_m.at<float>(38, 63))) << "just above max_depth";
   // The step edge survives: the pixel left of the edge stays near 1 m (the 2.5 m side has
   // weight exp(-1.5^2 / (2 0.04^2)) ~ 0), and the filter reduces the 3 mm noise.
   const int v = 25, u = w / 2 - 1;
