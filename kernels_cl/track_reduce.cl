@@ -9,9 +9,9 @@
 // left-multiplied increment (v, w), translation first: J = (grad, x cross grad), x = T p.
 //
 // One work item per 16 consecutive sampled pixels of a row (the lanes of 16-wide vectors), on a
-// 2D range over the sampled grid: no loops and no early exits. Lanes outside the grid or
-// without a valid sample contribute zeros. Each item folds its 16 lanes per term to 8, the
-// work-group then adds up its 16 items' terms in local memory (then the 8 lanes) and writes one
+// 2D range over the sampled grid (or a rectangle of it): no loops and no early exits. Lanes outside
+// the grid or without a valid sample contribute zeros. Each item folds its 16 lanes per term to 8,
+// the work-group then adds up its 16 items' terms in local memory (then the 8 lanes) and writes one
 // row of TRACK_TERMS partials:
 //   [0, 21)  upper triangle of H = sum c h J J^T (row-major: 00 01 .. 05 11 12 .. 55)
 //   [21, 27) g = sum c h J r
@@ -69,8 +69,9 @@ __attribute__((always_inline)) inline void track_reduce_term(__local const float
 
 __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track_accumulate(
     __global const float4* vertex, __global const float* q, const int width, const int height,
-    const int stride, const float4 r0, const float4 r1, const float4 r2, __global const int* index,
-    const int4 dims, __global const short2* voxels, const float voxel_size, const float truncation,
+    const int stride, const int su0, const int sv0, const int su1, const int sv1, const float4 r0,
+    const float4 r1, const float4 r2, __global const int* index, const int4 dims,
+    __global const short2* voxels, const float voxel_size, const float truncation,
     const float huber_delta, const float inlier_delta, const float inlier_noise,
     __global const float* prev_cost, __global float* pixel_cost, __global const float* prev_weight,
     __global float* pixel_weight, const int compare, const int fixed_weights,
@@ -80,12 +81,12 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
   // guarantees 32 KiB; unfolded float16, 35 KiB, did not fit there).
   __local float8 shared[TRACK_TERMS * TRACK_ITEMS];
   const int lid = get_local_id(0) + TRACK_LX * get_local_id(1);
-  const int sw = (width + stride - 1) / stride;
-  const int sh = (height + stride - 1) / stride;
-  const int sv = get_global_id(1);
-  const int16 su = (int16)(get_global_id(0) * 16) +
+  // The launch covers the sampled grid cells [su0, su1) x [sv0, sv1) (within the
+  // ceil(width / stride) x ceil(height / stride) grid; the host's region of interest).
+  const int sv = sv0 + (int)get_global_id(1);
+  const int16 su = (int16)(su0 + (int)get_global_id(0) * 16) +
                    (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  const int16 in_grid = (su < sw) & (int16)(sv < sh ? -1 : 0);
+  const int16 in_grid = (su < su1) & (int16)(sv < sv1 ? -1 : 0);
   // Pixel of each lane (0 outside the sampled grid, so that every read stays valid).
   const int16 pix = in_grid ? sv * stride * width + su * stride : 0;
   float16 px, py, pz, pw, qu, prev, prev_c = 0.0f;

@@ -79,8 +79,15 @@ void SlamSystem::trackObjects(const std::vector<Eigen::Isometry3d>& T_oc_predict
     TrackedObject& o = objects_[k];
     const Eigen::Isometry3d T_oc_before =
         o.volume->T_world_volume().inverse() * T_world_camera_ * last_motion_.inverse();
-    const track::TrackResult r = object_tracker_.track(
-        deviceView(*o.volume), vertex, estep_.q(o.e_step_slot).get(), T_oc_predicted[k]);
+    // q of the object is 0 outside its volume at the E-step's pose (T_oc_predicted): only the
+    // pixels its box projects to are evaluated.
+    const map::VolumeDeviceView view = deviceView(*o.volume);
+    const track::PixelRect roi = track::volumeImageBounds(
+        (view.dims_blocks.cast<double>() * map::kBlockSize) * view.voxel_size_m, T_oc_predicted[k],
+        intrinsics_);
+    const track::TrackResult r =
+        object_tracker_.track(view, vertex, estep_.q(o.e_step_slot).get(), T_oc_predicted[k], &roi);
+    counters_.add("object_track_pixels", roi.area());
     counters_.add("object_track_iterations", r.iterations);
     logDebug("frame ", frames_, ": object ", o.id, ": ", r.iterations, " it, valid ",
              r.valid_pixels, "/", r.input_pixels, ", inliers ", r.inlier_ratio, ", motion ",

@@ -84,7 +84,9 @@ SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrins
       estep_(ctx, config.em, intrinsics.width, intrinsics.height, 1 + config.objects.max_objects),
       raycaster_(ctx, config.map, intrinsics.width, intrinsics.height),
       timer_(stageNames(), 4096),
-      counters_({"track_iterations", "object_track_iterations", "integrated_blocks"}, 4096) {
+      counters_({"track_iterations", "object_track_iterations", "object_track_pixels",
+                 "integrated_blocks"},
+                4096) {
   // Pixel thresholds of the object rules are given for 640x480 images: scale them.
   const double scale = intrinsics.width / 640.0;
   em::ObjectOptions& o = config_.objects;

@@ -125,7 +125,8 @@ class SlamSystem {
   const map::VoxelPool& pool() const { return *pool_; }
   const StageTimer& timer() const { return timer_; }
   /// Work per frame: "track_iterations" (the camera's LM iterations), "object_track_iterations"
-  /// (summed over objects), "integrated_blocks" (blocks integrated, all volumes).
+  /// (summed over objects), "object_track_pixels" (the objects' tracking rectangles, summed),
+  /// "integrated_blocks" (blocks integrated, all volumes).
   const FrameCounters& counters() const { return counters_; }
   /// The detector's counters (plugin empty when none is configured).
   DetectorStats detectorStats() const;

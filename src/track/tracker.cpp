@@ -259,18 +259,62 @@ size_t Tracker::kernelLocalMemoryBytes() const {
   return static_cast<size_t>(bytes);
 }
 
-int Tracker::numGroups(int stride) const {
-  const int sw = (width_ + stride - 1) / stride;
-  const int sh = (height_ + stride - 1) / stride;
-  const int items_x = (sw + kLanes - 1) / kLanes;
-  return ((items_x + kLocalX - 1) / kLocalX) * ((sh + kLocalY - 1) / kLocalY);
+PixelRect volumeImageBounds(const Eigen::Vector3d& extent_m,
+                            const Eigen::Isometry3d& T_volume_camera, const io::Intrinsics& k) {
+  const PixelRect whole{0, 0, k.width, k.height};
+  const Eigen::Isometry3d T_camera_volume = T_volume_camera.inverse();
+  double u_min = std::numeric_limits<double>::infinity(), u_max = -u_min;
+  double v_min = u_min, v_max = -u_min;
+  for (int c = 0; c < 8; ++c) {
+    const Eigen::Vector3d corner((c & 1) ? extent_m.x() : 0.0, (c & 2) ? extent_m.y() : 0.0,
+                                 (c & 4) ? extent_m.z() : 0.0);
+    const Eigen::Vector3d p = T_camera_volume * corner;
+    if (!(p.z() > 1e-3)) return whole;  // behind or at the camera: no bounded projection
+    const double u = k.fx * p.x() / p.z() + k.cx;
+    const double v = k.fy * p.y() / p.z() + k.cy;
+    u_min = std::min(u_min, u);
+    u_max = std::max(u_max, u);
+    v_min = std::min(v_min, v);
+    v_max = std::max(v_max, v);
+  }
+  // The box is convex and in front of the camera: its projection is the hull of its corners'.
+  auto clampTo = [](double x, int hi) {
+    return static_cast<int>(std::max(0.0, std::min(static_cast<double>(hi), x)));
+  };
+  PixelRect r;
+  r.x0 = clampTo(std::floor(u_min) - 1.0, k.width);
+  r.y0 = clampTo(std::floor(v_min) - 1.0, k.height);
+  r.x1 = clampTo(std::ceil(u_max) + 2.0, k.width);
+  r.y1 = clampTo(std::ceil(v_max) + 2.0, k.height);
+  return r;
+}
+
+Tracker::GridRange Tracker::gridRange(int stride, const PixelRect* roi) const {
+  GridRange g;
+  g.su1 = (width_ + stride - 1) / stride;
+  g.sv1 = (height_ + stride - 1) / stride;
+  if (roi) {
+    // Sampled pixel u = su * stride lies in [x0, x1) <=> ceil(x0 / s) <= su < ceil(x1 / s).
+    auto cell = [stride](int x) { return (std::max(0, x) + stride - 1) / stride; };
+    g.su0 = std::min(g.su1, cell(roi->x0));
+    g.sv0 = std::min(g.sv1, cell(roi->y0));
+    g.su1 = std::max(g.su0, std::min(g.su1, cell(roi->x1)));
+    g.sv1 = std::max(g.sv0, std::min(g.sv1, cell(roi->y1)));
+  }
+  return g;
+}
+
+int Tracker::numGroups(int stride, const PixelRect* roi) const {
+  const GridRange g = gridRange(stride, roi);
+  const int items_x = (g.su1 - g.su0 + kLanes - 1) / kLanes;
+  return ((items_x + kLocalX - 1) / kLocalX) * ((g.sv1 - g.sv0 + kLocalY - 1) / kLocalY);
 }
 
 NormalEquations Tracker::evaluate(const map::VolumeDeviceView& volume, cl_mem vertex_map, cl_mem q,
                                   const Eigen::Isometry3d& T_volume_camera, int stride,
-                                  bool compare_with_last) {
+                                  bool compare_with_last, const PixelRect* roi) {
   const NormalEquations ne =
-      evaluateCandidate(volume, vertex_map, q, T_volume_camera, stride, compare_with_last);
+      evaluateCandidate(volume, vertex_map, q, T_volume_camera, stride, compare_with_last, roi);
   current_ = 1 - current_;
   return ne;
 }
@@ -288,11 +332,13 @@ cv::Mat Tracker::lastPixelCosts() const {
 
 NormalEquations Tracker::evaluateCandidate(const map::VolumeDeviceView& volume, cl_mem vertex_map,
                                            cl_mem q, const Eigen::Isometry3d& T_volume_camera,
-                                           int stride, bool compare) {
+                                           int stride, bool compare, const PixelRect* roi) {
   checkVolume(volume);
   if (!vertex_map) throw InvalidArgument("tracking: vertex map buffer is null");
   if (stride < 1) throw InvalidArgument("tracking: pixel stride must be >= 1");
-  const int groups = numGroups(stride);
+  const GridRange grid = gridRange(stride, roi);
+  const int groups = numGroups(stride, roi);
+  if (groups == 0) return NormalEquations();  // an empty rectangle: no pixel, no terms
   const Eigen::Matrix4f M = T_volume_camera.matrix().cast<float>();
   cl_float4 rows[3];
   for (int r = 0; r < 3; ++r) {
@@ -306,17 +352,17 @@ NormalEquations Tracker::evaluateCandidate(const map::VolumeDeviceView& volume, 
   const float delta = static_cast<float>(options_.huber_truncation_factor * volume.truncation_m);
   const float inlier_delta =
       static_cast<float>(options_.inlier_truncation_factor * volume.truncation_m);
-  cl::setArgs(accumulate_, vertex_map, q ? q : ones_.get(), width_, height_, stride, rows[0],
-              rows[1], rows[2], volume.index, dims, volume.voxels, volume.voxel_size_m,
-              volume.truncation_m, delta, inlier_delta,
-              static_cast<cl_float>(options_.inlier_noise_per_m2), costs_[current_].get(),
-              costs_[1 - current_].get(), weights_[current_].get(), weights_[1 - current_].get(),
-              compare ? 1 : 0, static_cast<cl_int>(options_.step_acceptance == "fixed_weights"),
-              partials_.get());
-  const int sw = (width_ + stride - 1) / stride;
-  const int sh = (height_ + stride - 1) / stride;
-  cl::enqueue(ctx_.queue(), accumulate_, static_cast<size_t>((sw + kLanes - 1) / kLanes),
-              static_cast<size_t>(sh), 0, kLocalX, kLocalY);
+  cl::setArgs(accumulate_, vertex_map, q ? q : ones_.get(), width_, height_, stride,
+              static_cast<cl_int>(grid.su0), static_cast<cl_int>(grid.sv0),
+              static_cast<cl_int>(grid.su1), static_cast<cl_int>(grid.sv1), rows[0], rows[1],
+              rows[2], volume.index, dims, volume.voxels, volume.voxel_size_m, volume.truncation_m,
+              delta, inlier_delta, static_cast<cl_float>(options_.inlier_noise_per_m2),
+              costs_[current_].get(), costs_[1 - current_].get(), weights_[current_].get(),
+              weights_[1 - current_].get(), compare ? 1 : 0,
+              static_cast<cl_int>(options_.step_acceptance == "fixed_weights"), partials_.get());
+  cl::enqueue(ctx_.queue(), accumulate_,
+              static_cast<size_t>((grid.su1 - grid.su0 + kLanes - 1) / kLanes),
+              static_cast<size_t>(grid.sv1 - grid.sv0), 0, kLocalX, kLocalY);
   double t[kTerms] = {};
   if (options_.final_reduction == "device") {
     cl::setArgs(reduce_, partials_.get(), groups, reduced_.get());
@@ -341,7 +387,7 @@ NormalEquations Tracker::evaluateCandidate(const map::VolumeDeviceView& volume, 
 Tracker::LevelResult Tracker::runLevel(const map::VolumeDeviceView& volume, cl_mem vertex_map,
                                        cl_mem q, int stride, int max_iterations, double tau,
                                        double inv_max_weight, Eigen::Isometry3d* T,
-                                       NormalEquations* at_T) {
+                                       NormalEquations* at_T, const PixelRect* roi) {
   // Levenberg-Marquardt (Madsen, Nielsen & Tingleff, "Methods for non-linear least squares
   // problems", 2004, alg. 3.16) on left increments; all terms scaled by 1 / max W. The actual
   // cost reduction of a step is measured over the pixels valid at both poses.
@@ -382,7 +428,7 @@ Tracker::LevelResult Tracker::runLevel(const map::VolumeDeviceView& volume, cl_m
     }
     const Vector6d h = scale * h_lm;
     const Eigen::Isometry3d T_new = applyLeftIncrement(M.transpose() * h, *T);
-    const NormalEquations ne = evaluateCandidate(volume, vertex_map, q, T_new, stride, true);
+    const NormalEquations ne = evaluateCandidate(volume, vertex_map, q, T_new, stride, true, roi);
     ++res.iterations;
     const double actual = -ne.cost_change * inv_max_weight;
     const double predicted = 0.5 * h_lm.dot(mu * h_lm - g);  // model decrease of the LM step
@@ -429,22 +475,23 @@ Tracker::LevelResult Tracker::runLevel(const map::VolumeDeviceView& volume, cl_m
 }
 
 TrackResult Tracker::track(const map::VolumeDeviceView& volume, cl_mem vertex_map, cl_mem q,
-                           const Eigen::Isometry3d& T_volume_camera_init) {
+                           const Eigen::Isometry3d& T_volume_camera_init, const PixelRect* roi) {
   TrackResult result;
   result.T_volume_camera = T_volume_camera_init;
   Eigen::Isometry3d T = T_volume_camera_init;
   const int levels = options_.coarse_levels;
-  NormalEquations ne = evaluate(volume, vertex_map, q, T, options_.pixel_stride << levels);
+  NormalEquations ne =
+      evaluate(volume, vertex_map, q, T, options_.pixel_stride << levels, false, roi);
   double inv_max_weight = 0.0;
   if (ne.max_weight > 0.0) inv_max_weight = 1.0 / ne.max_weight;
   bool finest_converged = false;
   double tau = options_.lm_tau;
   for (int level = levels; level >= 0 && inv_max_weight > 0.0; --level) {
     const int stride = options_.pixel_stride << level;
-    if (level != levels) ne = evaluate(volume, vertex_map, q, T, stride);
+    if (level != levels) ne = evaluate(volume, vertex_map, q, T, stride, false, roi);
     const int cap = level == 0 ? options_.max_iterations : options_.coarse_max_iterations;
     const LevelResult lr =
-        runLevel(volume, vertex_map, q, stride, cap, tau, inv_max_weight, &T, &ne);
+        runLevel(volume, vertex_map, q, stride, cap, tau, inv_max_weight, &T, &ne, roi);
     result.iterations += lr.iterations;
     finest_converged = lr.converged;
     // Later levels continue with the damping reached so far (relative to the curvature)

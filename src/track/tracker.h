@@ -47,6 +47,7 @@
 #include <vector>
 
 #include "cl/context.h"
+#include "io/frame.h"
 #include "map/volume_view.h"
 #include "map/voxel_layout.h"
 #include "track/se3.h"
@@ -89,6 +90,21 @@ NormalEquations accumulateReference(const map::VolumeHostView& volume, const cv:
                                     cv::Mat* pixel_cost = nullptr, double inlier_noise_per_m2 = 0.0,
                                     bool fixed_weights = false, double inlier_delta_m = -1.0);
 
+/// Pixels [x0, x1) x [y0, y1) of an image.
+struct PixelRect {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  bool empty() const { return x1 <= x0 || y1 <= y0; }
+  int area() const { return empty() ? 0 : (x1 - x0) * (y1 - y0); }
+};
+
+/// The pixels whose back-projected point can lie inside a volume's box [0, extent_m] (volume
+/// frame; T_volume_camera maps camera points into it): the bounding rectangle of the 8 projected
+/// corners widened by one pixel, clipped to the image. The whole image when a corner is not in
+/// front of the camera (z <= 1 mm). Pixel (u, v) back-projects along ((u - cx) / fx,
+/// (v - cy) / fy, 1), as the preprocessing does.
+PixelRect volumeImageBounds(const Eigen::Vector3d& extent_m,
+                            const Eigen::Isometry3d& T_volume_camera, const io::Intrinsics& k);
+
 /// Why a frame was declared lost (TrackResult::loss).
 enum class TrackLoss {
   kNone = 0,
@@ -130,16 +146,19 @@ class Tracker {
 
   /// Aligns the vertex map (float4 per pixel, camera frame, w = 0 invalid; width x height as
   /// constructed) to `volume`, starting from T_volume_camera_init. `q`: float per pixel
-  /// association weights, or nullptr for all ones.
+  /// association weights, or nullptr for all ones. `roi` (optional): only its pixels are
+  /// evaluated; the caller guarantees q = 0 outside it (e.g. volumeImageBounds of an object at
+  /// the E-step's pose), so the result is that of the whole image up to summation order, for
+  /// work in proportion to the rectangle.
   TrackResult track(const map::VolumeDeviceView& volume, cl_mem vertex_map, cl_mem q,
-                    const Eigen::Isometry3d& T_volume_camera_init);
+                    const Eigen::Isometry3d& T_volume_camera_init, const PixelRect* roi = nullptr);
 
   /// One device evaluation of the normal equations at T (unnormalised, like
   /// accumulateReference). With compare_with_last, cost_change/common compare with the
   /// per-pixel costs of the previous evaluate() call (same stride). For tests and benchmarks.
   NormalEquations evaluate(const map::VolumeDeviceView& volume, cl_mem vertex_map, cl_mem q,
                            const Eigen::Isometry3d& T_volume_camera, int stride,
-                           bool compare_with_last = false);
+                           bool compare_with_last = false, const PixelRect* roi = nullptr);
   /// Per-pixel (cost, weight c) of the last evaluate() call (CV_32FC2; cost NaN where the sample
   /// was not valid; weight 0 unless step_acceptance is fixed_weights; pixels not sampled at that
   /// stride keep stale values). Blocking read; for tests.
@@ -154,9 +173,10 @@ class Tracker {
   const TrackOptions& options() const { return options_; }
   int width() const { return width_; }
   int height() const { return height_; }
-  /// Work-group size of the accumulation kernel and the number of groups used at `stride`.
+  /// Work-group size of the accumulation kernel and the number of groups used at `stride`
+  /// (over the whole image, or over `roi`).
   static int localSize();
-  int numGroups(int stride) const;
+  int numGroups(int stride, const PixelRect* roi = nullptr) const;
   /// Local memory one work-group of the accumulation kernel uses on this device (bytes).
   size_t kernelLocalMemoryBytes() const;
 
@@ -169,11 +189,17 @@ class Tracker {
   // LM on one level; at_T holds the evaluation at *T (its per-pixel costs in costs_[current_]).
   LevelResult runLevel(const map::VolumeDeviceView& volume, cl_mem vertex_map, cl_mem q, int stride,
                        int max_iterations, double tau, double inv_max_weight, Eigen::Isometry3d* T,
-                       NormalEquations* at_T);
+                       NormalEquations* at_T, const PixelRect* roi);
   // Evaluates at T writing per-pixel costs to costs_[1 - current_], comparing with
   // costs_[current_] if `compare`. The caller swaps current_ to accept.
   NormalEquations evaluateCandidate(const map::VolumeDeviceView& volume, cl_mem vertex_map,
-                                    cl_mem q, const Eigen::Isometry3d& T, int stride, bool compare);
+                                    cl_mem q, const Eigen::Isometry3d& T, int stride, bool compare,
+                                    const PixelRect* roi);
+  // The sampled grid cells [su0, su1) x [sv0, sv1) at `stride` covering `roi` (or the image).
+  struct GridRange {
+    int su0 = 0, sv0 = 0, su1 = 0, sv1 = 0;
+  };
+  GridRange gridRange(int stride, const PixelRect* roi) const;
 
   cl::Context& ctx_;
   TrackOptions options_;

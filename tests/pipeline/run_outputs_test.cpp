@@ -75,7 +75,8 @@ TEST_F(RunOutputs, SummaryHasObjectsDetectorAndError) {
   EXPECT_FALSE(plain.contains("detector"));
   EXPECT_FALSE(plain.contains("error"));
   // The work counters are always there (no frames yet: count 0).
-  for (const char* counter : {"track_iterations", "object_track_iterations", "integrated_blocks"}) {
+  for (const char* counter : {"track_iterations", "object_track_iterations", "object_track_pixels",
+                              "integrated_blocks"}) {
     ASSERT_TRUE(plain["work_per_frame"].contains(counter)) << counter;
     EXPECT_EQ(plain["work_per_frame"][counter]["count"], 0) << counter;
   }
