@@ -18,16 +18,6 @@ namespace {
 constexpr float kPreprocessToleranceM = 2e-6f;
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
-io::Intrinsics kinectIntrinsics() {
-  io::Intrinsics k;
-  k.fx = k.fy = 525.0;
-  k.cx = 319.5;
-  k.cy = 239.5;
-  k.width = 640;
-  k.height = 480;
-  return k;
-}
-
 // Runs the device path and compares every pixel with the reference. Returns the number of
 // valid pixels.
 int compareWithReference(cl::Context& ctx, const cv::Mat& depth, const io::Intrinsics& k,
@@ -64,7 +54,7 @@ TEST_F(Preprocess, RealKinectDepthMatchesReference) {
   const cv::Mat depth =
       test::readDepthPng(test::dataPath("tum-fr1-xyz-pairs/case_1/dep_prev.png"), 5000.0);
   PreprocessOptions o;  // paper defaults: sigma 0.04 m, 4.5 px, 7x7
-  const int valid = compareWithReference(ctx(), depth, kinectIntrinsics(), o);
+  const int valid = compareWithReference(ctx(), depth, test::kinectCamera(), o);
   // The frame has holes (zeros) that must stay invalid; most of it is valid.
   const int raw_valid = cv::countNonZero(depth == depth);
   EXPECT_EQ(valid, raw_valid);
@@ -78,7 +68,7 @@ TEST_F(Preprocess, RealDepthWithRangeLimitsMatchesReference) {
   PreprocessOptions o;
   o.min_depth_m = 1.0;
   o.max_depth_m = 2.0;
-  const int valid = compareWithReference(ctx(), depth, kinectIntrinsics(), o);
+  const int valid = compareWithReference(ctx(), depth, test::kinectCamera(), o);
   int in_range = 0;
   for (auto it = depth.begin<float>(); it != depth.end<float>(); ++it) {
     in_range += (*it >= 1.0f && *it <= 2.0f) ? 1 : 0;
@@ -198,7 +188,7 @@ TEST(PreprocessReference, SemanticsOnConstructedDepth) {
 }
 
 TEST_F(Preprocess, BadInputIsAClearError) {
-  io::Intrinsics k = kinectIntrinsics();
+  io::Intrinsics k = test::kinectCamera();
   PreprocessOptions o;
   Preprocessor pre(ctx(), o, k);
   try {

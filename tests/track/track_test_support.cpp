@@ -222,6 +222,16 @@ io::Intrinsics smallCamera() {
   return k;
 }
 
+io::Intrinsics kinectCamera() {
+  io::Intrinsics k;
+  k.fx = k.fy = 525.0;
+  k.cx = 319.5;
+  k.cy = 239.5;
+  k.width = 640;
+  k.height = 480;
+  return k;
+}
+
 Eigen::Vector3d randomUnit(std::mt19937& rng) {
   std::normal_distribution<double> n(0.0, 1.0);
   Eigen::Vector3d v;

@@ -86,6 +86,8 @@ Eigen::Isometry3d lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& targ
 
 /// 320x240 pinhole camera (fx = fy = 262.5).
 io::Intrinsics smallCamera();
+/// Kinect-like 640x480 camera (f 525 px, centre 319.5, 239.5), as the TUM RGB-D frames.
+io::Intrinsics kinectCamera();
 
 /// Random unit vector.
 Eigen::Vector3d randomUnit(std::mt19937& rng);

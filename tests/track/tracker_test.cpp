@@ -723,12 +723,7 @@ TEST_F(TrackerTest, RegionOfInterestGivesTheWholeImageResult) {
 }
 
 TEST(VolumeImageBounds, HoldsEveryProjectedPointOfTheBoxAndIsTight) {
-  io::Intrinsics k;
-  k.fx = k.fy = 525.0;
-  k.cx = 319.5;
-  k.cy = 239.5;
-  k.width = 640;
-  k.height = 480;
+  const io::Intrinsics k = test::kinectCamera();
   const Eigen::Vector3d extent(0.6, 0.4, 0.5);
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -875,16 +870,6 @@ TEST(TrackLossRule, StiffnessCentreAndConditionDoNotDependOnTheOrigin) {
 
 // ---- real data: TUM fr1/xyz pair with motion-capture ground truth ---------------------------
 
-io::Intrinsics tumIntrinsics() {
-  io::Intrinsics k;
-  k.fx = k.fy = 525.0;
-  k.cx = 319.5;
-  k.cy = 239.5;
-  k.width = 640;
-  k.height = 480;
-  return k;
-}
-
 struct RealPair {
   std::unique_ptr<test::HostVolume> host;
   test::DeviceVolume device;
@@ -905,7 +890,7 @@ RealPair makeRealPair(cl::Context& ctx, const std::string& case_dir) {
   p.host = std::make_unique<test::HostVolume>(Eigen::Vector3i(64, 64, 64), 0.01f, 0.1f);
   p.T_volume_prev = Eigen::Isometry3d::Identity();
   p.T_volume_prev.translation() << 2.56, 2.56, 0.0;
-  test::fuseDepth(p.host.get(), depth_prev, tumIntrinsics(), p.T_volume_prev, 64.0f);
+  test::fuseDepth(p.host.get(), depth_prev, test::kinectCamera(), p.T_volume_prev, 64.0f);
   p.device = test::upload(ctx, *p.host);
   return p;
 }
@@ -913,7 +898,7 @@ RealPair makeRealPair(cl::Context& ctx, const std::string& case_dir) {
 TEST_F(TrackerTest, RealPairAccumulationMatchesReference) {
   const RealPair p = makeRealPair(ctx(), "case_1");
   const PreprocessedFrame frame =
-      preprocessReference(p.depth_curr, tumIntrinsics(), PreprocessOptions{});
+      preprocessReference(p.depth_curr, test::kinectCamera(), PreprocessOptions{});
   cl::MemHandle vertex =
       ctx().buffer(CL_MEM_READ_ONLY, frame.vertex.total() * sizeof(cv::Vec4f), frame.vertex.data);
   Tracker tracker(ctx(), TrackOptions{}, 640, 480);
@@ -932,7 +917,7 @@ TEST_F(TrackerTest, RealPairRecoversGroundTruthMotion) {
   for (const char* case_dir : {"case_1", "case_2"}) {
     SCOPED_TRACE(case_dir);
     const RealPair p = makeRealPair(ctx(), case_dir);
-    Preprocessor pre(ctx(), PreprocessOptions{}, tumIntrinsics());
+    Preprocessor pre(ctx(), PreprocessOptions{}, test::kinectCamera());
     pre.process(p.depth_curr);
     Tracker tracker(ctx(), TrackOptions{}, 640, 480);
     const TrackResult r =
