@@ -26,7 +26,12 @@ struct PreprocessOptions {
 
 struct TrackOptions {
   int max_iterations = 100;
-  double lm_tau = 1e3;
+  /// LM's initial damping mu0 = lm_tau * max diag(H). The paper's 1e3 spends the first ~7
+  /// iterations of every level ramping the damping down (each accepted step divides it by 3 at
+  /// most). bench/slam_bench, 300 frames at 640x480, LM iterations median / p90 per frame and ATE:
+  /// redkitchen 15 / 22, 2.214 cm (1e3) -> 5 / 9, 2.217 cm (1e-3); synthetic room 15 / 17, 0.335
+  /// cm -> 5 / 7, 0.336 cm. 0.1 and 1e-6: 7-8 / 10-16 and 5 / 7-11 iterations, the same ATE.
+  double lm_tau = 1e-3;
   double lm_eps = 1e-8;
   double lm_nu = 2.0;
   /// Huber threshold as a fraction of the truncation distance: 0.05 x 10 voxels = half a voxel
@@ -48,8 +53,9 @@ struct TrackOptions {
   int coarse_levels = 1;
   /// LM iteration cap on each coarse level (the finest level uses max_iterations).
   int coarse_max_iterations = 10;
-  /// Early exit: stop once an accepted increment is below this norm (metres and radians mixed,
-  /// 1e-4 = 0.1 mm / 0.1 mrad). 0 = only the LM criteria (lm_eps).
+  /// Early exit: stop once the Gauss-Newton step at the current pose (the model's distance to
+  /// its minimum, whatever LM's damping) is below this norm (metres and radians mixed, 1e-4 =
+  /// 0.1 mm / 0.1 mrad). 0 = only the LM criteria (lm_eps).
   double early_exit_step = 1e-4;
   /// Step extrapolation: an accepted LM step whose cost decrease exceeds 1.5x the model's
   /// prediction doubles the scale of the next steps, up to this factor (1 = plain LM).
@@ -72,7 +78,7 @@ struct TrackOptions {
   /// residuals weighted by the c of the accepted pose, as in the model; IRLS). The model holds c
   /// constant while W(p) moves with the pose: where W varies strongly (a small, partly observed
   /// object model) "cost" measures about half the predicted decrease even for tiny steps, so LM's
-  /// damping barely falls, and the stall rule ended object tracking at the prediction (occlusion
+  /// damping barely falls, and LM crawled and stopped near the prediction (occlusion
   /// preset, 320x240: the bear "converged" after 5 + 5 iterations with 0.05 mm of motion on 9
   /// frames in a row, then was lost 0.8 m off). The camera keeps "cost" (synthetic room at
   /// 640x480: ATE 0.518 / 0.527 cm with cost / fixed_weights); objects use "fixed_weights"
@@ -117,6 +123,13 @@ struct TrackOptions {
   /// wrong basin: real cameras move a few cm per frame).
   double max_motion_m = 0.3;
   double max_motion_deg = 20.0;
+  /// While recovering after a lost call (see recovery_min_inlier_ratio), lost when the estimate
+  /// moved farther than this from the last tracked pose: with no relocalisation, only a camera
+  /// back near its last tracked view is re-acquired. LM started from the stale pose of the
+  /// cabinet keyframes converged to wrong fits 0.16-0.23 m / 4-8 deg away that passed every
+  /// other rule (1.9-2.8 m off the ground truth).
+  double recovery_max_motion_m = 0.1;
+  double recovery_max_motion_deg = 5.0;
 
   void bind(OptionBinder& b) {
     b.integer("max_iterations", max_iterations, 1, 1000, "", "LM iterations per frame and volume");
@@ -133,7 +146,7 @@ struct TrackOptions {
     b.integer("coarse_max_iterations", coarse_max_iterations, 1, 1000, "",
               "LM iterations per coarse level");
     b.real("early_exit_step", early_exit_step, 0.0, 1.0, "m|rad",
-           "stop when an accepted increment is below this norm (0 = off)");
+           "stop when the Gauss-Newton step is below this norm (0 = off)");
     b.real("max_step_scale", max_step_scale, 1.0, 64.0, "",
            "LM step extrapolation limit where the cost falls faster than predicted (1 = off)");
     b.choice("final_reduction", final_reduction, {"host", "device"},
@@ -161,6 +174,10 @@ struct TrackOptions {
            "lost when the pose moved farther than this from its initial value");
     b.real("max_motion_deg", max_motion_deg, 0.0, 180.0, "deg",
            "lost when the pose rotated more than this from its initial value");
+    b.real("recovery_max_motion_m", recovery_max_motion_m, 0.0, 100.0, "m",
+           "after a lost frame: lost when the pose moved farther than this from the last tracked");
+    b.real("recovery_max_motion_deg", recovery_max_motion_deg, 0.0, 180.0, "deg",
+           "after a lost frame: lost when the pose rotated more than this from the last tracked");
   }
 };
 

@@ -13,10 +13,10 @@
 // when the actual cost reduction, measured over the pixels valid at both poses, is positive
 // (gain ratio rho > 0: mu *= max(1/3, 1 - (2 rho - 1)^3)); otherwise mu *= nu, nu doubles.
 // Stops when |g|_inf or |h| <= lm_eps, after max_iterations, or (early_exit_step > 0) once
-// |h| < early_exit_step while mu <= max diag(H). Optional coarse levels run first on every
-// 2^l-th pixel (pixel_stride x 2^l), each continuing with the damping the previous one reached.
-// Step extrapolation (max_step_scale > 1): while accepted steps decrease the cost by more than
-// 1.5x the model's prediction, the next LM steps are scaled by 2, 4, .. up to max_step_scale
+// the Gauss-Newton step -H^-1 g is shorter than early_exit_step. Optional coarse levels run first
+// on every 2^l-th pixel (pixel_stride x 2^l), each continuing with the damping the previous one
+// reached. Step extrapolation (max_step_scale > 1): while accepted steps decrease the cost by more
+// than 1.5x the model's prediction, the next LM steps are scaled by 2, 4, .. up to max_step_scale
 // (the IRLS Hessian is too stiff far from the minimum); a disappointing or rejected scaled step
 // falls back to scale 1 without changing the damping.
 //
@@ -27,6 +27,8 @@
 //   inliers / valid < min_inlier_ratio                 -> kFewInliers
 //     (inlier: |r| <= max(inlier delta, inlier_noise_per_m2 z^2), the depth noise allowed for;
 //     inlier delta = inlier_truncation_factor x truncation, the paper's Huber delta)
+//   recovering and |T_init^-1 T| > recovery_max_motion_m or recovery_max_motion_deg
+//                                                      -> kLargeMotion
 //   recovering and strict_inliers / valid < min(recovery_min_inlier_ratio, typical - 0.05)
 //                                                      -> kFewInliers
 //     (strict: |r| <= inlier delta; typical: running mean of the volume's tracked calls. There
@@ -37,7 +39,8 @@
 // A lost result still carries the estimate; the caller keeps its last good pose and does not
 // integrate the frame. "Recovering": the previous track() call on the same volume (identified
 // by its index buffer) was lost; the stricter inlier rule then applies until a call succeeds
-// (no relocalisation yet: a re-acquired pose near the last good one may be a wrong fit).
+// (no relocalisation yet: a re-acquired pose near the last good one may be a wrong fit), and
+// so does the recovery motion rule (SlamSystem starts a recovering call at the last good pose).
 #pragma once
 
 #include <Eigen/Geometry>
