@@ -94,6 +94,19 @@ class TrackerTest : public test::WithClQueue {
           makeWorld(*ctx_, test::roomCornerScene(), test::roomCornerCamera()));
     }
   }
+  // The room's frame and an all-invalid one (a tracker called on it loses the volume, so that
+  // its next call is a recovery), preprocessed.
+  struct RecoveryFrames {
+    explicit RecoveryFrames(cl::Context& ctx)
+        : empty(ctx, PreprocessOptions{}, room_->intrinsics),
+          room(ctx, PreprocessOptions{}, room_->intrinsics) {
+      empty.process(cv::Mat(room_->intrinsics.height, room_->intrinsics.width, CV_32F,
+                            cv::Scalar(std::numeric_limits<float>::quiet_NaN())));
+      room.process(room_->depth);
+    }
+    Preprocessor empty;
+    Preprocessor room;
+  };
   static std::unique_ptr<SyntheticWorld> room_;
 };
 std::unique_ptr<SyntheticWorld> TrackerTest::room_;
@@ -572,12 +585,9 @@ TEST_F(TrackerTest, IterationCapWithoutConvergenceIsLost) {
 }
 
 TEST_F(TrackerTest, AfterALostFrameTheRecoveryInlierRatioApplies) {
-  const cv::Mat empty(room_->intrinsics.height, room_->intrinsics.width, CV_32F,
-                      cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
-  Preprocessor pre_empty(ctx(), PreprocessOptions{}, room_->intrinsics);
-  pre_empty.process(empty);
-  Preprocessor pre(ctx(), PreprocessOptions{}, room_->intrinsics);
-  pre.process(room_->depth);
+  RecoveryFrames frames(ctx());
+  const Preprocessor& pre_empty = frames.empty;
+  const Preprocessor& pre = frames.room;
   TrackOptions o;
   o.coarse_levels = 0;
   o.lm_tau = 1e3;        // the paper's heavy initial damping, so that
@@ -620,12 +630,9 @@ TEST_F(TrackerTest, RecoveryOnlyReacquiresNearTheLastTrackedPose) {
   // camera, but after a lost frame a pose that far from where the call started is refused.
   constexpr double kStartOffsetM = 0.05;
   constexpr double kConvergedM = 1e-3;
-  const cv::Mat empty(room_->intrinsics.height, room_->intrinsics.width, CV_32F,
-                      cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
-  Preprocessor pre_empty(ctx(), PreprocessOptions{}, room_->intrinsics);
-  pre_empty.process(empty);
-  Preprocessor pre(ctx(), PreprocessOptions{}, room_->intrinsics);
-  pre.process(room_->depth);
+  RecoveryFrames frames(ctx());
+  const Preprocessor& pre_empty = frames.empty;
+  const Preprocessor& pre = frames.room;
   TrackOptions o;
   o.recovery_max_motion_m = 0.04;
   std::mt19937 rng(5);
