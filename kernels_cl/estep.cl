@@ -73,6 +73,76 @@ __kernel void estep_likelihood(__global const float4* vertex, const int count, c
   }
 }
 
+/// estep_likelihood for a volume without counts (p_fg = 1: the background), 16 consecutive
+/// pixels per work item in float16 lanes (explicit SIMD through emf_sample_sdf16, like
+/// track_accumulate: PoCL keeps the per-pixel kernel scalar). Per lane it computes what
+/// estep_likelihood does.
+__kernel void estep_likelihood16(__global const float4* vertex, const int count, const float4 r0,
+                                 const float4 r1, const float4 r2, __global const int* index,
+                                 const int4 dims, __global const short2* voxels,
+                                 const float voxel_size, const float truncation, const float sigma,
+                                 const float alpha, const float p_uniform, const float min_weight,
+                                 const int pfg_mode, const int first, __global float* likelihood,
+                                 __global float* sum, __global float* best,
+                                 __global float* residual) {
+  const int base = get_global_id(0) * 16;
+  if (base >= count) return;
+  float16 px, py, pz, pw;
+#define ESTEP_LOAD(l)                                      \
+  {                                                        \
+    const float4 p = vertex[min(base + 0x##l, count - 1)]; \
+    px.s##l = p.x;                                         \
+    py.s##l = p.y;                                         \
+    pz.s##l = p.z;                                         \
+    pw.s##l = p.w;                                         \
+  }
+  EMF_LANES16(ESTEP_LOAD)
+#undef ESTEP_LOAD
+  const float16 x = r0.x * px + r0.y * py + r0.z * pz + r0.w;
+  const float16 y = r1.x * px + r1.y * py + r1.z * pz + r1.w;
+  const float16 z = r2.x * px + r2.y * py + r2.z * pz + r2.w;
+  const float3 extent = (float3)((float)(dims.x * EMF_BLOCK), (float)(dims.y * EMF_BLOCK),
+                                 (float)(dims.z * EMF_BLOCK)) *
+                        voxel_size;
+  const int16 inside = (pw != 0.0f) & (x >= 0.0f) & (y >= 0.0f) & (z >= 0.0f) & (x < extent.x) &
+                       (y < extent.y) & (z < extent.z);
+  float16 weight, gx, gy, gz;
+  const float16 psi = emf_sample_sdf16(index, dims, voxels, voxel_size, truncation, x, y, z,
+                                       &weight, &gx, &gy, &gz);
+  const float16 abs_psi_in = (!isnan(psi) & (weight >= min_weight)) ? fabs(psi) : truncation;
+  const float16 lik_in = pfg_mode ? (float16)1.0f
+                                  : alpha / (2.0f * sigma) * exp(-abs_psi_in / sigma) * 1.0f +
+                                        (1.0f - alpha) * p_uniform;
+  const float16 lik = inside ? lik_in : 0.0f;
+  const float16 abs_psi = inside ? abs_psi_in : NAN;
+#define ESTEP_STORE(l)                            \
+  if (base + 0x##l < count) {                     \
+    const int u = base + 0x##l;                   \
+    const float lk = lik.s##l, ap = abs_psi.s##l; \
+    likelihood[u] = lk;                           \
+    if (pfg_mode) {                               \
+      if (first) {                                \
+        sum[u] = 0.0f;                            \
+        residual[u] = ap;                         \
+      } else {                                    \
+        sum[u] = fmax(sum[u], lk);                \
+      }                                           \
+    } else if (first) {                           \
+      sum[u] = lk;                                \
+      best[u] = lk;                               \
+      residual[u] = lk > 0.0f ? ap : NAN;         \
+    } else {                                      \
+      sum[u] += lk;                               \
+      if (lk > best[u]) {                         \
+        best[u] = lk;                             \
+        residual[u] = ap;                         \
+      }                                           \
+    }                                             \
+  }
+  EMF_LANES16(ESTEP_STORE)
+#undef ESTEP_STORE
+}
+
 /// q_i(u) = likelihood_i(u) / sum(u) in place (0 where the sum is 0). pfg_mode: objects keep
 /// their p_fg, the background (is_background) gets its own value times 1 - max object p_fg.
 __kernel void estep_normalize(__global float* q, __global const float* sum, const int count,

@@ -71,7 +71,7 @@ class EStep {
   int width_, height_;
   std::vector<cl::MemHandle> q_;
   cl::MemHandle sum_, best_, residual_;
-  cl::KernelHandle likelihood_, normalize_;
+  cl::KernelHandle likelihood_, likelihood16_, normalize_;
   int count_ = 0;
 };
 

@@ -122,6 +122,18 @@ TEST_P(EStepModes, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
   const cl::MemHandle d_vertex =
       ctx().buffer(CL_MEM_READ_ONLY, vertex.total() * sizeof(cv::Vec4f), vertex.data);
   EStep estep(ctx(), options, k.width, k.height, 4);
+  // The background twice: the second volume without counts takes the accumulating branch of the
+  // 16-lane likelihood kernel (the first one initialises sum, best and residual).
+  {
+    const std::vector<cv::Mat> q_twice_ref = eStepReference({host[0], host[0]}, vertex, options);
+    const EStepVolume bg{d_bg.view, nullptr, host[0].T_volume_camera};
+    estep.compute(d_vertex.get(), {bg, bg});
+    for (int i = 0; i < 2; ++i) {
+      EXPECT_LT(cv::norm(estep.downloadQ(i), q_twice_ref[static_cast<size_t>(i)], cv::NORM_INF),
+                kQTolerance)
+          << "volume " << i;
+    }
+  }
   estep.compute(d_vertex.get(), {{d_bg.view, nullptr, host[0].T_volume_camera},
                                  {d_1.view, c_1.get(), host[1].T_volume_camera},
                                  {d_2.view, c_2.get(), host[2].T_volume_camera}});
