@@ -110,9 +110,9 @@ __kernel void estep_likelihood16(__global const float4* vertex, const int count,
   const float16 psi = emf_sample_sdf16(index, dims, voxels, voxel_size, truncation, x, y, z,
                                        &weight, &gx, &gy, &gz);
   const float16 abs_psi_in = (!isnan(psi) & (weight >= min_weight)) ? fabs(psi) : truncation;
-  const float16 lik_in = pfg_mode ? (float16)1.0f
-                                  : alpha / (2.0f * sigma) * exp(-abs_psi_in / sigma) * 1.0f +
-                                        (1.0f - alpha) * p_uniform;
+  const float16 lik_in =
+      pfg_mode ? (float16)1.0f
+               : alpha / (2.0f * sigma) * exp(-abs_psi_in / sigma) + (1.0f - alpha) * p_uniform;
   const float16 lik = inside ? lik_in : 0.0f;
   const float16 abs_psi = inside ? abs_psi_in : NAN;
 #define ESTEP_STORE(l)                            \

@@ -414,6 +414,7 @@ Tracker::LevelResult Tracker::runLevel(const map::VolumeDeviceView& volume, cl_m
   // minimum), the LM step is scaled by up to max_step_scale, doubling per such step; any
   // disappointing or rejected extrapolated step falls back to the plain LM step.
   double scale = 1.0;
+  bool new_model = true;  // H and g changed since the early exit last looked at them
   while (res.iterations < max_iterations) {
     if (g.cwiseAbs().maxCoeff() <= eps) {
       res.converged = true;
@@ -426,7 +427,8 @@ Tracker::LevelResult Tracker::runLevel(const map::VolumeDeviceView& volume, cl_m
     // 1e-7 growing 3x per iteration: the first frames of a run stayed at their prediction, up to
     // 3.6 cm off on noise-free cars frames (a stall rule for crawling steps fired in that ramp
     // too).
-    if (options_.early_exit_step > 0.0) {
+    if (options_.early_exit_step > 0.0 && new_model) {
+      new_model = false;
       const double damping = kGaussNewtonDamping * H.diagonal().maxCoeff();
       const Vector6d h_gn = (H + damping * Matrix6d::Identity()).ldlt().solve(-g);
       if (h_gn.allFinite() && h_gn.norm() < options_.early_exit_step) {
@@ -454,6 +456,7 @@ Tracker::LevelResult Tracker::runLevel(const map::VolumeDeviceView& volume, cl_m
       current_ = 1 - current_;
       H = M * ne.H * M.transpose() * inv_max_weight;
       g = M * ne.g * inv_max_weight;
+      new_model = true;
       const double c = 2.0 * gain - 1.0;
       mu *= std::max(1.0 / 3.0, 1.0 - c * c * c);
       nu = options_.lm_nu;
