@@ -1,5 +1,6 @@
 // Preprocessing (METHOD.md step 1): depth range check, 7x7 bilateral filter of the depth image
-// and back-projection to a camera-frame vertex map.
+// (its range sigma grows with depth^2: PreprocessOptions::sigma_depth_per_m2) and
+// back-projection to a camera-frame vertex map.
 // CPU reference: track::preprocessReference (src/track/preprocess.cpp); keep them identical.
 //
 // Depth is float metres, NaN (or 0) = invalid. A pixel is valid when its depth lies in
@@ -66,8 +67,8 @@ __attribute__((always_inline)) inline float16 emf_exp_neg16(float16 x) {
 
 __kernel void preprocess_depth(__global const float* depth_in, __global float* depth_out,
                                __global float4* vertex, const int width, const int height,
-                               const float inv_two_sigma_space_sq,
-                               const float inv_two_sigma_depth_sq, const float min_depth,
+                               const float inv_two_sigma_space_sq, const float sigma_depth,
+                               const float sigma_depth_per_m2, const float min_depth,
                                const float max_depth, const float fx, const float fy,
                                const float cx, const float cy) {
   const int u0 = get_global_id(0) * 16;
@@ -79,6 +80,9 @@ __kernel void preprocess_depth(__global const float* depth_in, __global float* d
   // d > 0 && d >= min_depth  <=>  d > above (floats: d >= m <=> d > the float below m), so a
   // neighbour's range check is two comparisons (both false for NaN).
   const float above = fmax(0.0f, nextafter(min_depth, -INFINITY));
+  // Range sigma at the centre's depth: sigma_depth + sigma_depth_per_m2 z^2.
+  const float16 sigma_r = sigma_depth + sigma_depth_per_m2 * (centre_valid ? d0 * d0 : 0.0f);
+  const float16 inv_two_sigma_r_sq = 0.5f / (sigma_r * sigma_r);
   float16 sum_w = 0.0f;
   float16 sum_wd = 0.0f;
   for (int dv = -PRE_RADIUS; dv <= PRE_RADIUS; ++dv) {
@@ -90,7 +94,7 @@ __kernel void preprocess_depth(__global const float* depth_in, __global float* d
       const int16 use = (d > above) & (d <= max_depth);
       const float16 dd = d - d0;
       const float16 w = emf_exp_neg16(-(float)(du * du + dv * dv) * inv_two_sigma_space_sq -
-                                      dd * dd * inv_two_sigma_depth_sq);
+                                      dd * dd * inv_two_sigma_r_sq);
       sum_w += use ? w : 0.0f;
       sum_wd += use ? w * d : 0.0f;
     }

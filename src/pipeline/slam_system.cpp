@@ -47,6 +47,8 @@ track::PreprocessOptions objectPreprocessOptions(const Config& config) {
   if (!config.objects.filter_depth) {
     o.bilateral_radius_px = config.objects.depth_filter_radius_px;
     o.sigma_depth_m = config.objects.depth_filter_sigma_m;
+    // The objects' small window keeps silhouettes sharp; its fixed range sigma is theirs.
+    o.sigma_depth_per_m2 = 0.0;
   }
   return o;
 }

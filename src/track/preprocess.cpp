@@ -54,7 +54,8 @@ PreprocessedFrame preprocessReference(const cv::Mat& depth_m, const io::Intrinsi
   const float min_d = static_cast<float>(o.min_depth_m);
   const float max_d = static_cast<float>(o.max_depth_m);
   const float inv_s = static_cast<float>(1.0 / (2.0 * o.sigma_space_px * o.sigma_space_px));
-  const float inv_d = static_cast<float>(1.0 / (2.0 * o.sigma_depth_m * o.sigma_depth_m));
+  const float sigma_d = static_cast<float>(o.sigma_depth_m);
+  const float sigma_d_per_m2 = static_cast<float>(o.sigma_depth_per_m2);
   const float fx = static_cast<float>(k.fx), fy = static_cast<float>(k.fy);
   const float cx = static_cast<float>(k.cx), cy = static_cast<float>(k.cy);
   PreprocessedFrame out;
@@ -68,6 +69,8 @@ PreprocessedFrame preprocessReference(const cv::Mat& depth_m, const io::Intrinsi
         out.vertex.at<cv::Vec4f>(v, u) = cv::Vec4f(kNaN, kNaN, kNaN, 0.0f);
         continue;
       }
+      const float sigma_r = sigma_d + sigma_d_per_m2 * (d0 * d0);  // as the kernel
+      const float inv_d = 0.5f / (sigma_r * sigma_r);
       float sum_w = 0.0f, sum_wd = 0.0f;
       for (int dv = -r; dv <= r; ++dv) {
         const int vv = v + dv;
@@ -121,9 +124,9 @@ void Preprocessor::process(const cv::Mat& depth_m) {
 void Preprocessor::process(cl_mem depth_m) {
   const auto& o = options_;
   const float inv_s = static_cast<float>(1.0 / (2.0 * o.sigma_space_px * o.sigma_space_px));
-  const float inv_d = static_cast<float>(1.0 / (2.0 * o.sigma_depth_m * o.sigma_depth_m));
   cl::setArgs(kernel_, depth_m, filtered_.get(), vertex_.get(), intrinsics_.width,
-              intrinsics_.height, inv_s, inv_d, static_cast<float>(o.min_depth_m),
+              intrinsics_.height, inv_s, static_cast<float>(o.sigma_depth_m),
+              static_cast<float>(o.sigma_depth_per_m2), static_cast<float>(o.min_depth_m),
               static_cast<float>(o.max_depth_m), static_cast<float>(intrinsics_.fx),
               static_cast<float>(intrinsics_.fy), static_cast<float>(intrinsics_.cx),
               static_cast<float>(intrinsics_.cy));

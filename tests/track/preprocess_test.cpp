@@ -53,7 +53,7 @@ class Preprocess : public test::WithClQueue {};
 TEST_F(Preprocess, RealKinectDepthMatchesReference) {
   const cv::Mat depth =
       test::readDepthPng(test::dataPath("tum-fr1-xyz-pairs/case_1/dep_prev.png"), 5000.0);
-  PreprocessOptions o;  // paper defaults: sigma 0.04 m, 4.5 px, 7x7
+  PreprocessOptions o;  // defaults: range sigma 0.04 m + 0.02 z^2, 4.5 px, 7x7
   const int valid = compareWithReference(ctx(), depth, test::kinectCamera(), o);
   // The frame has holes (zeros) that must stay invalid; most of it is valid.
   const int raw_valid = cv::countNonZero(depth == depth);
@@ -132,6 +132,10 @@ TEST_F(Preprocess, ConstructedEdgesAndHolesMatchReference) {
   o.sigma_space_px = 2.0;
   o.sigma_depth_m = 0.01;
   compareWithReference(ctx(), depth, k, o);
+  o.sigma_depth_per_m2 = 0.0;  // a fixed range sigma (the paper)
+  compareWithReference(ctx(), depth, k, o);
+  o.sigma_depth_per_m2 = 0.5;
+  compareWithReference(ctx(), depth, k, o);
 }
 
 TEST(PreprocessReference, SemanticsOnConstructedDepth) {
@@ -159,7 +163,8 @@ TEST(PreprocessReference, SemanticsOnConstructedDepth) {
   EXPECT_FALSE(std::isnan(out.depth_m.at<float>(38, 61))) << "exactly max_depth is valid";
   EXPECT_TRUE(std::isnan(out.depth_m.at<float>(38, 63))) << "just above max_depth";
   // The step edge survives: the pixel left of the edge stays near 1 m (the 2.5 m side has
-  // weight exp(-1.5^2 / (2 0.04^2)) ~ 0), and the filter reduces the 3 mm noise.
+  // weight exp(-1.5^2 / (2 0.06^2)) ~ 0, range sigma 0.04 + 0.02 z^2 at 1 m), and the filter
+  // reduces the 3 mm noise.
   const int v = 25, u = w / 2 - 1;
   EXPECT_NEAR(out.depth_m.at<float>(v, u), 1.0f + 0.002f * v, 0.004f);
   EXPECT_NEAR(out.depth_m.at<float>(v, u + 1), 2.5f + 0.002f * v, 0.004f);
@@ -185,6 +190,97 @@ TEST(PreprocessReference, SemanticsOnConstructedDepth) {
   o.bilateral_radius_px = 0;
   const PreprocessedFrame raw = preprocessReference(depth, k, o);
   EXPECT_EQ(raw.depth_m.at<float>(v, u), depth.at<float>(v, u));
+}
+
+// A slanted plane at 3.5-4 m as a structured-light sensor sees it: axial noise (1.9-2.5 cm
+// here) and disparity quantised to 1/8 px (f 525 px, baseline 7.5 cm, as Kinect v1: depth
+// steps of 0.003 z^2, 4-5 cm here). Returns the RMS error (metres) of the filtered depth against
+// the true plane over the image's interior.
+double staircaseError(const PreprocessOptions& o, bool device, cl::Context* ctx) {
+  const int w = 64, h = 24;
+  io::Intrinsics k;
+  k.fx = k.fy = 525.0;
+  k.cx = 31.5;
+  k.cy = 11.5;
+  k.width = w;
+  k.height = h;
+  const double fb = 525.0 * 0.075, step_px = 0.125;
+  cv::Mat truth(h, w, CV_32F), depth(h, w, CV_32F);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      const double z = 3.5 + 0.008 * u;
+      const double sigma = 0.0012 + 0.0019 * (z - 0.4) * (z - 0.4);  // Kinect v1 axial noise
+      const double disparity = std::round(fb / (z + sigma * unit(rng)) / step_px) * step_px;
+      truth.at<float>(v, u) = static_cast<float>(z);
+      depth.at<float>(v, u) = static_cast<float>(fb / disparity);
+    }
+  }
+  cv::Mat out;
+  if (device) {
+    Preprocessor pre(*ctx, o, k);
+    pre.process(depth);
+    out = pre.download().depth_m;
+  } else {
+    out = preprocessReference(depth, k, o).depth_m;
+  }
+  double sum = 0.0;
+  int n = 0;
+  for (int v = 4; v < h - 4; ++v) {
+    for (int u = 4; u < w - 4; ++u) {
+      sum += std::pow(out.at<float>(v, u) - truth.at<float>(v, u), 2);
+      ++n;
+    }
+  }
+  return std::sqrt(sum / n);
+}
+
+// With the default range sigma growing with depth^2 (0.16-0.2 m here), the filter smooths the
+// noisy quantisation staircase towards the plane; a fixed 4 cm range sigma keeps much of each
+// 4-5 cm step as if it were an edge. Measured RMS error: raw 25.2 mm, fixed sigma 10.1 mm,
+// default 3.2 mm.
+TEST_F(Preprocess, FarQuantisationStepsAreSmoothedNotKeptAsEdges) {
+  PreprocessOptions o;
+  PreprocessOptions fixed;
+  fixed.sigma_depth_per_m2 = 0.0;
+  PreprocessOptions raw;
+  raw.bilateral_radius_px = 0;
+  const double e_raw = staircaseError(raw, false, nullptr);
+  const double e_fixed = staircaseError(fixed, false, nullptr);
+  const double e_default = staircaseError(o, false, nullptr);
+  constexpr double kMaxDefaultErrorM = 0.005;  // half a 1 cm voxel
+  constexpr double kMinFixedToDefaultRatio = 2.5;
+  EXPECT_LT(e_default, kMaxDefaultErrorM) << "raw " << e_raw << ", fixed " << e_fixed;
+  EXPECT_GT(e_fixed, kMinFixedToDefaultRatio * e_default);
+  EXPECT_GT(e_raw, e_fixed);
+  // The kernel agrees with the reference on this input.
+  EXPECT_NEAR(staircaseError(o, true, &ctx()), e_default, 1e-5);
+}
+
+// The price of the wider range sigma at depth: a 0.3 m jump at 2 m (range sigma 0.08 m on the
+// near side, 0.093 m on the far side) leaks a little across. Measured: 0.2 / 1.2 mm next to
+// the edge, 0.04 / 0.2 mm two columns away (a fixed 4 cm sigma: 0.0 mm; sigma_depth_per_m2
+// 0.02 would give 24 mm next to the edge).
+TEST(PreprocessReference, ThirtyCentimetreEdgeAtTwoMetresStaysSharp) {
+  const int w = 32, h = 16;
+  io::Intrinsics k;
+  k.fx = k.fy = 525.0;
+  k.cx = 15.5;
+  k.cy = 7.5;
+  k.width = w;
+  k.height = h;
+  cv::Mat depth(h, w, CV_32F);
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) depth.at<float>(v, u) = u < w / 2 ? 2.0f : 2.3f;
+  }
+  const PreprocessedFrame out = preprocessReference(depth, k, PreprocessOptions());
+  constexpr float kMaxEdgeLeakM = 0.003f;
+  constexpr float kMaxLeakTwoColumnsAwayM = 0.0005f;
+  EXPECT_NEAR(out.depth_m.at<float>(8, w / 2 - 1), 2.0f, kMaxEdgeLeakM);
+  EXPECT_NEAR(out.depth_m.at<float>(8, w / 2), 2.3f, kMaxEdgeLeakM);
+  EXPECT_NEAR(out.depth_m.at<float>(8, w / 2 - 3), 2.0f, kMaxLeakTwoColumnsAwayM);
+  EXPECT_NEAR(out.depth_m.at<float>(8, w / 2 + 2), 2.3f, kMaxLeakTwoColumnsAwayM);
 }
 
 TEST_F(Preprocess, BadInputIsAClearError) {

@@ -530,16 +530,28 @@ TEST_F(TrackerTest, ConvergesAboutEveryRotationCentre) {
 }
 
 TEST_F(TrackerTest, StartingAtTheSolutionStaysThere) {
-  Preprocessor pre(ctx(), PreprocessOptions{}, room_->intrinsics);
-  pre.process(room_->depth);
-  Tracker tracker(ctx(), TrackOptions{}, room_->intrinsics.width, room_->intrinsics.height);
-  const TrackResult r =
-      tracker.track(room_->device.view, pre.vertexMap().get(), nullptr, room_->T_volume_camera_gt);
-  EXPECT_LT(translationError(room_->T_volume_camera_gt, r.T_volume_camera), 2e-4);
-  EXPECT_LT(rotationError(room_->T_volume_camera_gt, r.T_volume_camera), 0.02 * kDeg);
-  EXPECT_TRUE(r.converged);
-  EXPECT_FALSE(r.lost) << r.loss_reason;
-  EXPECT_GT(r.inverse_condition, TrackOptions{}.min_inverse_condition);
+  // With a fixed range sigma (the paper's filter) the noise-free room's optimum is the true
+  // pose. The default range sigma, growing with depth^2, blurs the room's depth edges a little
+  // and moves the optimum by a fraction of a millimetre (measured 0.16 mm / 0.005 deg with
+  // a fixed sigma, 0.39 mm / 0.012 deg with the default).
+  constexpr double kExactToleranceM = 2e-4;
+  constexpr double kDefaultFilterToleranceM = 6e-4;
+  for (const double per_m2 : {0.0, PreprocessOptions{}.sigma_depth_per_m2}) {
+    PreprocessOptions po;
+    po.sigma_depth_per_m2 = per_m2;
+    Preprocessor pre(ctx(), po, room_->intrinsics);
+    pre.process(room_->depth);
+    Tracker tracker(ctx(), TrackOptions{}, room_->intrinsics.width, room_->intrinsics.height);
+    const TrackResult r = tracker.track(room_->device.view, pre.vertexMap().get(), nullptr,
+                                        room_->T_volume_camera_gt);
+    EXPECT_LT(translationError(room_->T_volume_camera_gt, r.T_volume_camera),
+              per_m2 == 0.0 ? kExactToleranceM : kDefaultFilterToleranceM)
+        << "sigma_depth_per_m2 " << per_m2;
+    EXPECT_LT(rotationError(room_->T_volume_camera_gt, r.T_volume_camera), 0.02 * kDeg);
+    EXPECT_TRUE(r.converged);
+    EXPECT_FALSE(r.lost) << r.loss_reason;
+    EXPECT_GT(r.inverse_condition, TrackOptions{}.min_inverse_condition);
+  }
 }
 
 TEST_F(TrackerTest, FeaturelessPlaneIsDegenerate) {
@@ -705,15 +717,17 @@ TEST_F(TrackerTest, RecoveryOnlyReacquiresNearTheLastTrackedPose) {
 }
 
 TEST_F(TrackerTest, FarNoisyDepthAtTheRightPoseIsNotLost) {
-  // The room pushed 2.5 m back (depths ~4.5-6.5 m) seen twice from the same pose through the
+  // The room pushed 3 m back (depths ~5-7 m) seen twice from the same pose through the
   // Kinect-v1 noise model (independent noise), the first view fused alone into a 1 cm volume (a
   // thin map, as after the first frame of a run). At the true pose many residuals exceed the 2 cm
   // Huber delta but not the depth-dependent inlier radius: the loss rule must not call this frame
   // lost (with the fixed delta alone it did: the occlusion preset at 640x480 lost 29 of 30 frames).
-  constexpr double kBackM = 2.5;
-  // Pose error allowed with this noise (sigma 3-7 cm per pixel), and the difference between the
-  // strict ratios of two trackers that stop at slightly different poses.
-  constexpr double kNoisyPoseToleranceM = 0.01;
+  constexpr double kBackM = 3.0;
+  // Pose error allowed with this noise (sigma 5-9 cm per pixel; measured 9.0 mm), and the
+  // difference between the strict ratios of two trackers that stop at slightly different poses.
+  // (At 2.5 m the preprocessing's range sigma, growing with depth^2, now smooths the noise
+  // enough that the strict ratio passes: 0.77.)
+  constexpr double kNoisyPoseToleranceM = 0.015;
   constexpr double kRatioTolerance = 0.02;
   const io::Intrinsics& k = room_->intrinsics;
   Eigen::Isometry3d back = Eigen::Isometry3d::Identity();
