@@ -47,7 +47,9 @@ track::PreprocessOptions objectPreprocessOptions(const Config& config) {
   if (!config.objects.filter_depth) {
     o.bilateral_radius_px = config.objects.depth_filter_radius_px;
     o.sigma_depth_m = config.objects.depth_filter_sigma_m;
-    // The objects' small window keeps silhouettes sharp; its fixed range sigma is theirs.
+    // The objects' fixed range sigma: growing it with depth as the camera's (+0.02 z^2) blended
+    // silhouettes at 320x240 (bear 2.5 -> 3.0 cm, chair 1.1 -> 3.9 cm; cars at 640x480 1.9-2.0 ->
+    // 1.8-1.9 cm).
     o.sigma_depth_per_m2 = 0.0;
   }
   return o;
