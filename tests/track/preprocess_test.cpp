@@ -192,18 +192,24 @@ TEST(PreprocessReference, SemanticsOnConstructedDepth) {
   EXPECT_EQ(raw.depth_m.at<float>(v, u), depth.at<float>(v, u));
 }
 
+// A w x h pinhole camera with focal length f (px) and the principal point at the image centre.
+io::Intrinsics centredCamera(int w, int h, double f) {
+  io::Intrinsics k;
+  k.fx = k.fy = f;
+  k.cx = 0.5 * (w - 1);
+  k.cy = 0.5 * (h - 1);
+  k.width = w;
+  k.height = h;
+  return k;
+}
+
 // A slanted plane at 3.5-4 m as a structured-light sensor sees it: axial noise (1.9-2.5 cm
 // here) and disparity quantised to 1/8 px (f 525 px, baseline 7.5 cm, as Kinect v1: depth
 // steps of 0.003 z^2, 4-5 cm here). Returns the RMS error (metres) of the filtered depth against
 // the true plane over the image's interior.
 double staircaseError(const PreprocessOptions& o, bool device, cl::Context* ctx) {
   const int w = 64, h = 24;
-  io::Intrinsics k;
-  k.fx = k.fy = 525.0;
-  k.cx = 31.5;
-  k.cy = 11.5;
-  k.width = w;
-  k.height = h;
+  const io::Intrinsics k = centredCamera(w, h, 525.0);
   const double fb = 525.0 * 0.075, step_px = 0.125;
   cv::Mat truth(h, w, CV_32F), depth(h, w, CV_32F);
   std::mt19937 rng(5);
@@ -264,12 +270,7 @@ TEST_F(Preprocess, FarQuantisationStepsAreSmoothedNotKeptAsEdges) {
 // 0.02 would give 24 mm next to the edge).
 TEST(PreprocessReference, ThirtyCentimetreEdgeAtTwoMetresStaysSharp) {
   const int w = 32, h = 16;
-  io::Intrinsics k;
-  k.fx = k.fy = 525.0;
-  k.cx = 15.5;
-  k.cy = 7.5;
-  k.width = w;
-  k.height = h;
+  const io::Intrinsics k = centredCamera(w, h, 525.0);
   cv::Mat depth(h, w, CV_32F);
   for (int v = 0; v < h; ++v) {
     for (int u = 0; u < w; ++u) depth.at<float>(v, u) = u < w / 2 ? 2.0f : 2.3f;
