@@ -53,7 +53,7 @@ class Preprocess : public test::WithClQueue {};
 TEST_F(Preprocess, RealKinectDepthMatchesReference) {
   const cv::Mat depth =
       test::readDepthPng(test::dataPath("tum-fr1-xyz-pairs/case_1/dep_prev.png"), 5000.0);
-  PreprocessOptions o;  // defaults: range sigma 0.04 m + 0.02 z^2, 4.5 px, 7x7
+  PreprocessOptions o;  // defaults: range sigma 0.04 m + 0.01 z^2, 4.5 px, 7x7
   const int valid = compareWithReference(ctx(), depth, test::kinectCamera(), o);
   // The frame has holes (zeros) that must stay invalid; most of it is valid.
   const int raw_valid = cv::countNonZero(depth == depth);
@@ -163,7 +163,7 @@ TEST(PreprocessReference, SemanticsOnConstructedDepth) {
   EXPECT_FALSE(std::isnan(out.depth_m.at<float>(38, 61))) << "exactly max_depth is valid";
   EXPECT_TRUE(std::isnan(out.depth_m.at<float>(38, 63))) << "just above max_depth";
   // The step edge survives: the pixel left of the edge stays near 1 m (the 2.5 m side has
-  // weight exp(-1.5^2 / (2 0.06^2)) ~ 0, range sigma 0.04 + 0.02 z^2 at 1 m), and the filter
+  // weight exp(-1.5^2 / (2 0.05^2)) ~ 0, range sigma 0.04 + 0.01 z^2 at 1 m), and the filter
   // reduces the 3 mm noise.
   const int v = 25, u = w / 2 - 1;
   EXPECT_NEAR(out.depth_m.at<float>(v, u), 1.0f + 0.002f * v, 0.004f);
