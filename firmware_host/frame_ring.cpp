@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <thread>
 
@@ -221,12 +222,18 @@ RingStatus FrameRing::push(const io::Frame& frame) {
     }
     checkImage(frame.color, options_.color_width, options_.color_height, CV_8UC3, "colour");
   }
+  if (frame.timestamp_text.size() >= kTimestampTextCapacity) {
+    throw InvalidArgument("frame ring: frame " + std::to_string(frame.index) +
+                          ": timestamp text '" + frame.timestamp_text + "' is longer than " +
+                          std::to_string(kTimestampTextCapacity - 1) + " characters");
+  }
   FrameSlot& slot = writeSlot();
   frame.depth.copyTo(slot.depth);  // same size and type: copies in place, no allocation
   if (has_color) frame.color.copyTo(slot.color);
   slot.has_color = has_color;
   slot.source_index = frame.index;
   slot.timestamp_s = frame.timestamp;
+  std::memcpy(slot.timestamp_text, frame.timestamp_text.c_str(), frame.timestamp_text.size() + 1);
   slot.color_timestamp_s = frame.rgb_timestamp;
   return commit();
 }
@@ -264,6 +271,7 @@ RingStatus FrameRing::pop(io::Frame& frame, double timeout_s) {
   frame.index = slot->source_index;
   frame.timestamp = slot->timestamp_s;
   frame.rgb_timestamp = slot->color_timestamp_s;
+  frame.timestamp_text = slot->timestamp_text;
   slot->depth.copyTo(frame.depth);
   if (slot->has_color) {
     slot->color.copyTo(frame.color);

@@ -64,6 +64,9 @@ struct FrameRingOptions {
   double block_timeout_s = 1.0;
 };
 
+/// Capacity of FrameSlot::timestamp_text, NUL included.
+constexpr size_t kTimestampTextCapacity = 64;
+
 /// One preallocated frame slot. The producer fills it in place; the consumer reads it in place.
 struct FrameSlot {
   /// 0-based position of the frame in the producer's stream (assigned at commit); consecutive
@@ -74,6 +77,9 @@ struct FrameSlot {
   /// Sensor timestamps of depth and colour, seconds (sensor clock).
   double timestamp_s = 0.0;
   double color_timestamp_s = 0.0;
+  /// The depth timestamp as the source wrote it (Frame::timestamp_text, which names dataset
+  /// files), NUL-terminated; "" when the source gave none.
+  char timestamp_text[kTimestampTextCapacity] = {};
   /// Host steady-clock time at which the producer committed the frame, nanoseconds (for
   /// end-to-end latency; std::chrono::steady_clock epoch).
   int64_t commit_time_ns = 0;

@@ -194,6 +194,7 @@ EMF_API emf_status emf_system_save_mesh(emf_system* system, int32_t volume_id, c
  *  camera) with the system's intrinsics into caller buffers of width * height elements
  *  (row-major, tightly packed): depth (float metres along the camera z axis, NaN = nothing),
  *  volume ids (int32, -1 = nothing, 0 = background, else object id). Either buffer may be NULL.
+ *  A pose that is not finite or whose R is not a rotation (to 1e-4) is EMF_ERROR_INVALID_ARGUMENT.
  *  Not concurrent with other calls on `system`. */
 EMF_API emf_status emf_system_render(emf_system* system, const emf_pose* T_world_camera,
                                      float* depth_m, int32_t* volume_ids);
@@ -231,8 +232,8 @@ EMF_API void emf_runtime_options_init(emf_runtime_options* options);
 EMF_API emf_status emf_runtime_create(const emf_runtime_options* options, emf_runtime** out);
 
 /** Starts the capture and SLAM threads. No-op while running or after the end of the stream;
- *  EMF_ERROR_STATE after emf_runtime_stop (a runtime is not restartable). Call start, stop and
- *  destroy from one controlling thread. */
+ *  EMF_ERROR_STATE after emf_runtime_stop, whatever the state (a runtime is not restartable). Call
+ * start, stop and destroy from one controlling thread. */
 EMF_API emf_status emf_runtime_start(emf_runtime* runtime);
 
 /** Waits up to timeout_ms (0 = do not wait) for the next result and copies it into `result`
@@ -243,8 +244,9 @@ EMF_API emf_status emf_runtime_start(emf_runtime* runtime);
  *  exhausted and every result was polled; EMF_ERROR_DEVICE when no result is queued and the
  *  live sensor is disconnected (returned as soon as it disconnects during the wait, or at the
  *  timeout while it stays away; the runtime keeps running and resumes when the sensor is back);
- *  EMF_ERROR_STATE after stop once the queue is empty; the error of a fatal failure (e.g.
- *  EMF_ERROR_IO for an unreadable dataset file) once the queue is empty. Thread-safe. */
+ *  EMF_ERROR_STATE before emf_runtime_start and after stop once the queue is empty; the error of a
+ * fatal failure (e.g. EMF_ERROR_IO for an unreadable dataset file) once the queue is empty.
+ * Thread-safe. */
 EMF_API emf_status emf_runtime_poll(emf_runtime* runtime, int32_t timeout_ms,
                                     emf_frame_result* result, emf_object_info* objects,
                                     int32_t capacity, int32_t* count);

@@ -6,8 +6,11 @@
  *
  * It returns its function table, or NULL if it cannot serve a host of that ABI version. The host
  * checks abi_version and struct_size before using the table, and validates every result
- * (mask size, score range, box inside the image); a plugin that fails to load or returns
- * garbage gets a clear error and the SLAM keeps running without that detection.
+ * (mask size, score range, box inside the image). A plugin that cannot be found, loaded or
+ * created is an error when the system starts (emf_system_set_intrinsics, emf_runtime_create or
+ * `emf run`: EMF_ERROR_NOT_FOUND, EMF_ERROR_IO, EMF_ERROR_VERSION_MISMATCH, or the status the
+ * plugin's create() returned). A detect() that fails or returns garbage gets a clear message
+ * and the SLAM keeps running without that detection.
  *
  * Ownership: results returned by detect() belong to the plugin until the host passes them back
  * to release(). Images in emf_detector_frame belong to the host and are valid only during the
@@ -84,9 +87,12 @@ typedef struct emf_detection {
 
 /** The result of one detect() call. */
 typedef struct emf_detection_result {
-  size_t struct_size;              /**< sizeof(emf_detection_result) */
-  int32_t count;                   /**< number of detections */
-  const emf_detection* detections; /**< count entries */
+  size_t struct_size; /**< sizeof(emf_detection_result) */
+  int32_t count;      /**< number of detections */
+  /** count entries, each detections[0].struct_size bytes after the previous one (a plugin
+   *  built against a newer header, with fields appended to emf_detection, steps by its own
+   *  size); every entry's struct_size must be the same. */
+  const emf_detection* detections;
 } emf_detection_result;
 
 /** The plugin's function table. */

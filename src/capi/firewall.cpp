@@ -7,6 +7,7 @@
 #include "common/error.h"
 #include "common/status_name.h"
 #include "firmware_host/sensor_error.h"
+#include "pipeline/detector_plugin.h"
 
 namespace emf::capi {
 namespace {
@@ -47,6 +48,8 @@ emf_status translateCurrentException(const char* function) {
     return fail(EMF_ERROR_NOT_FOUND, where + e.what());
   } catch (const ResourceError& e) {
     return fail(EMF_ERROR_OUT_OF_MEMORY, where + e.what());
+  } catch (const pipeline::PluginError& e) {
+    return fail(e.status(), where + e.what());
   } catch (const Error& e) {
     return fail(EMF_ERROR_INTERNAL, where + e.what());
   } catch (const std::bad_alloc&) {

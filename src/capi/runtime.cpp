@@ -160,7 +160,7 @@ EMF_API emf_status emf_runtime_poll(emf_runtime* runtime, int32_t timeout_ms,
     }
     if (capacity > 0) {
       s = emf::capi::checkStruct(objects, objects[0].struct_size, sizeof(emf_object_info),
-                                 "emf_object_info (objects[0])", fn);
+                                 "emf_object_info", fn);
       if (s != EMF_OK) return s;
     }
     emf::runtime::Runtime& rt = *runtime->runtime;

@@ -222,9 +222,8 @@ emf_status writeObjects(const std::vector<pipeline::ObjectOutcome>& objects,
                 std::string(function) + ": capacity " + std::to_string(capacity) + " is negative");
   }
   if (capacity > 0) {
-    const emf_status s =
-        checkStruct(objects_out, objects_out ? objects_out[0].struct_size : 0,
-                    sizeof(emf_object_info), "emf_object_info (objects[0])", function);
+    const emf_status s = checkStruct(objects_out, objects_out ? objects_out[0].struct_size : 0,
+                                     sizeof(emf_object_info), "emf_object_info", function);
     if (s != EMF_OK) return s;
     const size_t stride = objects_out[0].struct_size;
     const size_t n = std::min(static_cast<size_t>(capacity), objects.size());
@@ -369,8 +368,13 @@ EMF_API emf_status emf_system_process_frame(emf_system* system, const emf_frame*
     }
     emf::capi::requireSlam(*system, fn);
     const std::string name = emf::capi::frameName(*system);
-    if (!std::isfinite(frame->timestamp) ||
-        (system->has_frame && !(frame->timestamp > system->last_timestamp))) {
+    if (!std::isfinite(frame->timestamp)) {
+      return fail(EMF_ERROR_INVALID_ARGUMENT,
+                  std::string(fn) + ": " + name + ": timestamp " +
+                      std::to_string(frame->timestamp) +
+                      " is not a finite number: pass sensor timestamps in seconds, increasing");
+    }
+    if (system->has_frame && !(frame->timestamp > system->last_timestamp)) {
       return fail(EMF_ERROR_INVALID_ARGUMENT,
                   std::string(fn) + ": " + name + ": timestamp " +
                       std::to_string(frame->timestamp) + " does not increase (previous " +
@@ -519,6 +523,19 @@ EMF_API emf_status emf_system_render(emf_system* system, const emf_pose* T_world
     if (!system->raycaster) {
       system->raycaster =
           std::make_unique<emf::map::RayCaster>(*system->cl, system->config.map, k.width, k.height);
+    }
+    if (T_world_camera) {
+      const Eigen::Map<const Eigen::Matrix<double, 3, 4, Eigen::RowMajor>> m(T_world_camera->m);
+      const Eigen::Matrix3d R = m.leftCols<3>();
+      const double orthogonality =
+          (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+      if (!m.allFinite() || !(orthogonality < 1e-4) || !(R.determinant() > 0)) {
+        return fail(
+            EMF_ERROR_INVALID_ARGUMENT,
+            std::string(fn) + ": T_world_camera is not a rigid transform (max |R^T R - I| " +
+                std::to_string(orthogonality) + ", det R " + std::to_string(R.determinant()) +
+                "): pass a rotation matrix and a translation in metres, row-major 3x4");
+      }
     }
     const Eigen::Isometry3d pose =
         T_world_camera ? emf::capi::fromCPose(*T_world_camera) : system->slam->T_world_camera();

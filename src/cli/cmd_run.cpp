@@ -1,7 +1,7 @@
 // `emf run`: the SLAM on a source (dataset, synthetic world or sensor), writing camera.txt,
 // the background mesh, per-object trajectories and meshes, optional per-frame images and a run
-// summary into the output folder. An error in the middle of the run still writes the outputs of
-// the frames done so far (run.json then has "error").
+// summary into the output folder. An error in the middle of the run, Ctrl-C or SIGTERM still
+// write the outputs of the frames done so far (run.json then has "error").
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -9,6 +9,7 @@
 #include "cl/context.h"
 #include "cli/arg_parser.h"
 #include "cli/commands.h"
+#include "cli/interrupt.h"
 #include "cli/load_config.h"
 #include "common/error.h"
 #include "common/log.h"
@@ -89,8 +90,12 @@ int cmdRun(const std::vector<std::string>& args) {
   const auto t0 = std::chrono::steady_clock::now();
   io::Frame frame;
   int64_t n = 0;
+  // From here on the first Ctrl-C / SIGTERM ends the run after the current frame and the outputs
+  // are still written (a second one terminates at once).
+  const InterruptGuard interrupt;
   try {
-    while ((config.source.max_frames == 0 || n < config.source.max_frames) && src->next(frame)) {
+    while (!interrupt.requested() &&
+           (config.source.max_frames == 0 || n < config.source.max_frames) && src->next(frame)) {
       const pipeline::FrameOutcome o = slam.process(frame);
       objects.add(o);
       if (o.lost) {
@@ -119,6 +124,10 @@ int cmdRun(const std::vector<std::string>& args) {
     // Keep what the frames so far produced: write the outputs, then fail.
     info.error = "stopped after " + std::to_string(n) + " frames: " + e.what();
   }
+  if (interrupt.requested() && info.error.empty()) {
+    info.error = std::string("interrupted by ") + interrupt.signalName() + " after " +
+                 std::to_string(n) + " frames";
+  }
   progress.finish();
   info.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::string output_error;
@@ -134,7 +143,7 @@ int cmdRun(const std::vector<std::string>& args) {
   if (!info.error.empty()) {
     std::fprintf(stderr, "emf run: error: %s\n(outputs of the frames done so far are in %s)\n",
                  info.error.c_str(), std::filesystem::absolute(out_dir).string().c_str());
-    return kExitFailure;
+    return interrupt.requested() ? interrupt.exitCode() : kExitFailure;
   }
   if (!output_error.empty()) throw IoError(output_error);
 

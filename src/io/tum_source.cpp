@@ -112,7 +112,13 @@ Intrinsics resolveIntrinsics(const SourceOptions& options, const std::string& ca
   }
   k.width = size.width;
   k.height = size.height;
-  return k;
+  try {
+    return checkedIntrinsics(k);
+  } catch (const InvalidArgument& e) {
+    const bool from_file = given == 0;
+    throw IoError((from_file ? calibration_path : what + " (URI query / source.* config)") + ": " +
+                  e.what());
+  }
 }
 
 TumSource::TumSource(const std::string& dir, const SourceOptions& options)

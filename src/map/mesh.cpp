@@ -332,7 +332,8 @@ void writePly(const std::string& path, const Mesh& mesh, bool binary) {
   std::error_code ec;
   fs::rename(tmp, target, ec);
   if (ec) {
-    fs::remove(tmp, ec);
+    std::error_code ignored;  // keep the rename's error for the message
+    fs::remove(tmp, ignored);
     throw IoError("cannot write mesh " + path + ": rename from " + tmp.string() +
                   " failed: " + ec.message());
   }

@@ -25,6 +25,8 @@ constexpr size_t kApiSizeWithFlags = offsetof(emf_detector_api, flags) + sizeof(
 constexpr size_t kMinResultSize = offsetof(emf_detection_result, detections) + sizeof(void*);
 constexpr size_t kMinDetectionSize =
     offsetof(emf_detection, mask_probability) + sizeof(const float*);
+// A bound on a newer header's emf_detection: a larger detections[0].struct_size is garbage.
+constexpr size_t kMaxDetectionSize = 4096;
 
 emf_image imageView(const cv::Mat* m, emf_pixel_format format) {
   emf_image img{};
@@ -49,7 +51,8 @@ std::string resolvePluginPath(const std::string& name_or_path,
   if (is_path) {
     if (!fs::exists(name_or_path)) {
       throw PluginError("detector plugin file '" + name_or_path +
-                        "' does not exist (give an existing .so path or a plugin name)");
+                            "' does not exist (give an existing .so path or a plugin name)",
+                        EMF_ERROR_NOT_FOUND);
     }
     return name_or_path;
   }
@@ -64,8 +67,9 @@ std::string resolvePluginPath(const std::string& name_or_path,
   }
   throw PluginError(
       "detector plugin '" + name_or_path + "' not found (looked for libemf_detector_" +
-      name_or_path + ".so in:" + (searched.empty() ? " no folders" : searched) +
-      "\n); add its folder to detector.search_path or EMF_PLUGIN_PATH, or give a path");
+          name_or_path + ".so in:" + (searched.empty() ? " no folders" : searched) +
+          "\n); add its folder to detector.search_path or EMF_PLUGIN_PATH, or give a path",
+      EMF_ERROR_NOT_FOUND);
 }
 
 std::unique_ptr<DetectorPlugin> DetectorPlugin::load(const std::string& name_or_path,
@@ -81,14 +85,16 @@ std::unique_ptr<DetectorPlugin> DetectorPlugin::load(const std::string& name_or_
   p->handle_ = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (!p->handle_) {
     const char* e = dlerror();
-    throw PluginError("cannot load detector plugin " + path + ": " + (e ? e : "unknown error"));
+    throw PluginError("cannot load detector plugin " + path + ": " + (e ? e : "unknown error"),
+                      EMF_ERROR_IO);
   }
   void* sym = dlsym(p->handle_, EMF_DETECTOR_ENTRY_SYMBOL);
   if (!sym) {
     throw PluginError("detector plugin " + path +
-                      " does not export " EMF_DETECTOR_ENTRY_SYMBOL
-                      " (is it an emf detector plugin? build it against include/emf/"
-                      "emf_detector.h and export the entry with EMF_DETECTOR_EXPORT)");
+                          " does not export " EMF_DETECTOR_ENTRY_SYMBOL
+                          " (is it an emf detector plugin? build it against include/emf/"
+                          "emf_detector.h and export the entry with EMF_DETECTOR_EXPORT)",
+                      EMF_ERROR_IO);
   }
   emf_detector_entry_fn entry = nullptr;
   static_assert(sizeof(entry) == sizeof(sym), "function and object pointers differ in size");
@@ -96,23 +102,27 @@ std::unique_ptr<DetectorPlugin> DetectorPlugin::load(const std::string& name_or_
   const emf_detector_api* api = entry(EMF_DETECTOR_ABI_VERSION);
   if (!api) {
     throw PluginError("detector plugin " + path + " refused host ABI version " +
-                      std::to_string(EMF_DETECTOR_ABI_VERSION) +
-                      " (rebuild the plugin against this emf's emf_detector.h)");
+                          std::to_string(EMF_DETECTOR_ABI_VERSION) +
+                          " (rebuild the plugin against this emf's emf_detector.h)",
+                      EMF_ERROR_VERSION_MISMATCH);
   }
   if (api->abi_version != EMF_DETECTOR_ABI_VERSION) {
     throw PluginError("detector plugin " + path + " has ABI version " +
-                      std::to_string(api->abi_version) + ", this emf needs " +
-                      std::to_string(EMF_DETECTOR_ABI_VERSION) +
-                      " (rebuild the plugin against this emf's emf_detector.h)");
+                          std::to_string(api->abi_version) + ", this emf needs " +
+                          std::to_string(EMF_DETECTOR_ABI_VERSION) +
+                          " (rebuild the plugin against this emf's emf_detector.h)",
+                      EMF_ERROR_VERSION_MISMATCH);
   }
   if (api->struct_size < kMinApiSize) {
     throw PluginError("detector plugin " + path + ": emf_detector_api.struct_size is " +
-                      std::to_string(api->struct_size) + ", expected at least " +
-                      std::to_string(kMinApiSize) + " (plugin built against a broken header?)");
+                          std::to_string(api->struct_size) + ", expected at least " +
+                          std::to_string(kMinApiSize) + " (plugin built against a broken header?)",
+                      EMF_ERROR_VERSION_MISMATCH);
   }
   if (!api->create || !api->detect || !api->release || !api->destroy) {
-    throw PluginError("detector plugin " + path +
-                      ": function table has a NULL create/detect/release/destroy");
+    throw PluginError(
+        "detector plugin " + path + ": function table has a NULL create/detect/release/destroy",
+        EMF_ERROR_VERSION_MISMATCH);
   }
   p->api_ = api;
   p->name_ = api->name ? api->name : fs::path(path).stem().string();
@@ -128,8 +138,9 @@ std::unique_ptr<DetectorPlugin> DetectorPlugin::load(const std::string& name_or_
   if (s != EMF_OK || !p->instance_) {
     p->instance_ = nullptr;
     throw PluginError("detector plugin '" + p->name_ + "' (" + path +
-                      ") failed to create with config '" + config +
-                      "': " + (error[0] ? error : "no message") + " [" + std::to_string(s) + "]");
+                          ") failed to create with config '" + config +
+                          "': " + (error[0] ? error : "no message") + " [" + statusName(s) + "]",
+                      s < 0 && s != EMF_ERROR_INTERNAL ? s : EMF_ERROR_CONFIG);
   }
   logInfo("detector plugin '", p->name_, "' loaded from ", path);
   return p;
@@ -190,20 +201,34 @@ DetectorOutput DetectorPlugin::detect(const io::Frame& frame, const cv::Mat* bac
       (result->count > 0 && !result->detections)) {
     out.error = who + ": malformed emf_detection_result (struct_size " +
                 std::to_string(result->struct_size) + ", count " + std::to_string(result->count) +
-                "); continuing without detections";
-    if (log_problems_) logWarning(out.error);
+                ")";
+    if (log_problems_) logWarning(out.error, "; continuing without detections");
     return out;
   }
+  // The entries lie detections[0].struct_size bytes apart (a plugin built against a newer header
+  // has a larger emf_detection); every entry must say the same size.
+  const size_t stride = result->count > 0 ? result->detections[0].struct_size : 0;
+  if (result->count > 0 && (stride < kMinDetectionSize || stride > kMaxDetectionSize ||
+                            stride % alignof(emf_detection) != 0)) {
+    out.error = who + ": malformed emf_detection_result: detections[0].struct_size " +
+                std::to_string(stride) + " is not a multiple of " +
+                std::to_string(alignof(emf_detection)) + " in [" +
+                std::to_string(kMinDetectionSize) + ", " + std::to_string(kMaxDetectionSize) + "]";
+    if (log_problems_) logWarning(out.error, "; continuing without detections");
+    return out;
+  }
+  const auto* base = reinterpret_cast<const unsigned char*>(result->detections);
   for (int32_t i = 0; i < result->count; ++i) {
-    const emf_detection& d = result->detections[i];
+    const emf_detection& d =
+        *reinterpret_cast<const emf_detection*>(base + static_cast<size_t>(i) * stride);
     const std::string tag = who + " detection " + std::to_string(i);
     auto reject = [&](const std::string& why) {
       out.rejected.push_back(tag + ": " + why + " — dropped");
       if (log_problems_) logWarning(out.rejected.back());
     };
-    if (d.struct_size < kMinDetectionSize) {
-      reject("struct_size " + std::to_string(d.struct_size) + " < " +
-             std::to_string(kMinDetectionSize));
+    if (d.struct_size != stride) {
+      reject("struct_size " + std::to_string(d.struct_size) + " differs from detections[0]'s " +
+             std::to_string(stride) + " (all entries must have the same size)");
       continue;
     }
     if (!d.class_name || !d.class_name[0]) {

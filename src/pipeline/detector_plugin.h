@@ -15,9 +15,17 @@
 namespace emf::pipeline {
 
 /// A plugin could not be found, loaded or created (message says which file and what to do).
+/// status() is the C API's code for it: EMF_ERROR_NOT_FOUND (no such plugin),
+/// EMF_ERROR_VERSION_MISMATCH (ABI), EMF_ERROR_IO (not a loadable plugin), or the plugin's own
+/// error from create() (EMF_ERROR_CONFIG when it gave none).
 class PluginError : public Error {
  public:
-  using Error::Error;
+  explicit PluginError(const std::string& message, emf_status status = EMF_ERROR_CONFIG)
+      : Error(message), status_(status) {}
+  emf_status status() const { return status_; }
+
+ private:
+  emf_status status_;
 };
 
 /// The outcome of one detect() call.

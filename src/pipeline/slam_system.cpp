@@ -79,7 +79,7 @@ SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrins
                        const std::string& source_uri)
     : ctx_(ctx),
       config_(config),
-      intrinsics_(intrinsics),
+      intrinsics_(io::checkedIntrinsics(intrinsics)),
       pool_(std::make_unique<map::VoxelPool>(ctx, config.map)),
       preprocessor_(ctx, config.preprocess, intrinsics),
       object_preprocessor_(ctx, objectPreprocessOptions(config), intrinsics),

@@ -109,7 +109,7 @@ Runtime::~Runtime() {
 
 void Runtime::start() {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (state_ == RuntimeState::kStopped) {
+  if (stop_called_) {
     throw StateError(
         "runtime: start() after stop(): a stopped runtime cannot be restarted; "
         "create a new one");
@@ -122,6 +122,7 @@ void Runtime::start() {
 }
 
 void Runtime::stop() {
+  stop_called_ = true;
   stop_requested_.store(true, std::memory_order_release);
   ring_->stop();
   if (capture_thread_.joinable()) capture_thread_.join();
@@ -168,6 +169,7 @@ bool Runtime::pushFrame(io::Frame& frame) {
   view.index = frame.index;
   view.timestamp = frame.timestamp;
   view.rgb_timestamp = frame.rgb_timestamp;
+  view.timestamp_text = frame.timestamp_text;  // names dataset files (detector plugins)
   view.depth = frame.depth;
   if (o.color_width > 0 && frame.color.type() == CV_8UC3 && frame.color.cols == o.color_width &&
       frame.color.rows == o.color_height) {
@@ -257,9 +259,13 @@ void Runtime::slamLoop() {
       frame.index = slot->source_index;
       frame.timestamp = slot->timestamp_s;
       frame.rgb_timestamp = slot->color_timestamp_s;
-      char stamp[32];
-      std::snprintf(stamp, sizeof(stamp), "%.6f", slot->timestamp_s);
-      frame.timestamp_text = stamp;
+      if (slot->timestamp_text[0] != '\0') {
+        frame.timestamp_text = slot->timestamp_text;
+      } else {
+        char stamp[32];
+        std::snprintf(stamp, sizeof(stamp), "%.6f", slot->timestamp_s);
+        frame.timestamp_text = stamp;
+      }
       frame.depth = slot->depth;  // shares the slot's pixels while the slot is held
       if (slot->has_color) frame.color = slot->color;
       {
@@ -330,6 +336,9 @@ PollStatus Runtime::poll(double timeout_s, RuntimeResult* result) {
       std::chrono::steady_clock::now() +
       std::chrono::nanoseconds(static_cast<int64_t>(std::max(0.0, timeout_s) * 1e9));
   std::unique_lock<std::mutex> lock(mutex_);
+  if (state_ == RuntimeState::kCreated) {
+    throw StateError("runtime: poll() before start(): start the runtime first");
+  }
   const bool down_at_entry = sensor_down_;
   while (true) {
     if (!queue_.empty()) {

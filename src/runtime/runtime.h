@@ -154,7 +154,8 @@ class Runtime {
   void start();
   /// Stops both threads and joins them. Idempotent; frames still in the ring are discarded.
   void stop();
-  /// Waits up to timeout_s for the next result (see PollStatus). Any thread.
+  /// Waits up to timeout_s for the next result (see PollStatus). Any thread. Throws StateError
+  /// before start() (nothing would ever arrive).
   PollStatus poll(double timeout_s, RuntimeResult* result);
 
   RuntimeState state() const;
@@ -197,6 +198,7 @@ class Runtime {
   std::atomic<bool> stop_requested_{false};
   std::atomic<bool> capture_done_{false};  // the capture thread published its last frame
   bool started_ = false;                   // controlling thread only
+  bool stop_called_ = false;               // controlling thread only: start() is refused
 
   mutable std::mutex mutex_;  // guards everything below
   std::condition_variable cv_;

@@ -182,14 +182,15 @@ static void errorPaths(const char* uri) {
   CHECK(emf_runtime_system(NULL) == NULL);
   emf_runtime_destroy(NULL); /* no-op */
 
-  /* A runtime that is never started: polls time out, stats are zero, destroy joins nothing. */
+  /* A runtime that is never started: polls are a state error (nothing would ever arrive),
+   * stats are zero, destroy joins nothing. */
   emf_runtime_options_init(&opts);
   opts.source_uri = uri;
   opts.config_yaml = CONFIG;
   CHECK(emf_runtime_create(&opts, &rt) == EMF_OK);
   memset(&result, 0, sizeof(result));
   result.struct_size = sizeof(result);
-  CHECK(emf_runtime_poll(rt, 0, &result, NULL, 0, NULL) == EMF_ERROR_TIMEOUT);
+  CHECK_MSG(emf_runtime_poll(rt, 100, &result, NULL, 0, NULL), EMF_ERROR_STATE, "before start");
   CHECK_MSG(emf_runtime_poll(rt, -1, &result, NULL, 0, NULL), EMF_ERROR_INVALID_ARGUMENT,
             "negative");
   result.struct_size = 4;

@@ -188,6 +188,16 @@ int main(int argc, char** argv) {
   k.width = -4;
   CHECK_MSG(emf_system_set_intrinsics(sys, &k), EMF_ERROR_INVALID_ARGUMENT, "width=-4");
   k.width = fr.width;
+  /* Far-off values are not a camera (the map's ray walks would be unbounded). */
+  k.cx = -1e7;
+  CHECK_MSG(emf_system_set_intrinsics(sys, &k), EMF_ERROR_INVALID_ARGUMENT, "principal point");
+  k.cx = fr.cx;
+  k.fx = 0.5;
+  CHECK_MSG(emf_system_set_intrinsics(sys, &k), EMF_ERROR_INVALID_ARGUMENT, "1/20 of the image");
+  k.fx = fr.fx;
+  k.width = 2147483647;
+  CHECK_MSG(emf_system_set_intrinsics(sys, &k), EMF_ERROR_INVALID_ARGUMENT, "image size");
+  k.width = fr.width;
   CHECK(emf_system_set_intrinsics(sys, &k) == EMF_OK);
   CHECK_MSG(emf_system_set_intrinsics(sys, &k), EMF_ERROR_STATE, "already set");
 
@@ -304,6 +314,11 @@ int main(int argc, char** argv) {
       /* the same timestamp again is rejected and not processed */
       CHECK_MSG(emf_system_process_frame(sys, &frame, &result), EMF_ERROR_INVALID_ARGUMENT,
                 "does not increase");
+      /* a timestamp that is not a number says so */
+      frame.timestamp = NAN;
+      CHECK_MSG(emf_system_process_frame(sys, &frame, &result), EMF_ERROR_INVALID_ARGUMENT,
+                "is not a finite number");
+      frame.timestamp = fr.timestamp[n];
     }
     free(depth16);
     depth16 = NULL;
@@ -336,7 +351,7 @@ int main(int argc, char** argv) {
   CHECK_MSG(emf_system_get_objects(sys, NULL, 4, &count), EMF_ERROR_INVALID_ARGUMENT, "is NULL");
   objects[0].struct_size = 4;
   CHECK_MSG(emf_system_get_objects(sys, objects, 4, &count), EMF_ERROR_INVALID_ARGUMENT,
-            "sizeof(emf_object_info");
+            "(set it to sizeof(emf_object_info))");
   CHECK_MSG(emf_system_get_objects(sys, objects, -1, &count), EMF_ERROR_INVALID_ARGUMENT,
             "negative");
 
@@ -417,6 +432,21 @@ int main(int argc, char** argv) {
   CHECK(emf_system_render(sys, NULL, NULL, NULL) == EMF_OK);
   CHECK_MSG(emf_system_render(NULL, NULL, render_depth, NULL), EMF_ERROR_INVALID_ARGUMENT,
             "system is NULL");
+  {
+    /* Poses that are not rigid transforms: all zero, a scaled rotation, a NaN. */
+    emf_pose bad;
+    memset(&bad, 0, sizeof(bad));
+    CHECK_MSG(emf_system_render(sys, &bad, render_depth, NULL), EMF_ERROR_INVALID_ARGUMENT,
+              "not a rigid transform");
+    bad = result.T_world_camera;
+    for (i = 0; i < 12; ++i) bad.m[i] *= 2.0;
+    CHECK_MSG(emf_system_render(sys, &bad, render_depth, NULL), EMF_ERROR_INVALID_ARGUMENT,
+              "not a rigid transform");
+    bad = result.T_world_camera;
+    bad.m[3] = NAN;
+    CHECK_MSG(emf_system_render(sys, &bad, render_depth, NULL), EMF_ERROR_INVALID_ARGUMENT,
+              "not a rigid transform");
+  }
   free(render_depth);
   free(render_ids);
   free(diffs);
@@ -425,6 +455,18 @@ int main(int argc, char** argv) {
 
   emf_system_destroy(sys);
   emf_system_destroy(NULL);
+
+  /* A detector plugin that cannot be found: NOT_FOUND (not an internal error), naming it. */
+  {
+    emf_system_options opts;
+    emf_system* with_plugin = NULL;
+    emf_system_options_init(&opts);
+    opts.config_yaml = "map: {memory_mb: 16}\ndetector: {plugin: no_such_detector}\n";
+    CHECK(emf_system_create(&opts, &with_plugin) == EMF_OK);
+    CHECK_MSG(emf_system_set_intrinsics(with_plugin, &k), EMF_ERROR_NOT_FOUND,
+              "detector plugin 'no_such_detector' not found");
+    emf_system_destroy(with_plugin);
+  }
   if (g_failed == 0) printf("capi_sync_test: %d checks passed\n", g_checks);
   return g_failed == 0 ? 0 : 1;
 }

@@ -172,5 +172,34 @@ TEST(CliRun, BrokenFrameKeepsTheOutputsOfTheFramesBefore) {
   EXPECT_NE(j["error"].get<std::string>().find("stopped after 3 frames"), std::string::npos);
 }
 
+TEST(CliRun, SigtermEndsTheRunAfterTheCurrentFrameAndKeepsItsOutputs) {
+  // A long run, terminated once its fourth frame's image exists: the outputs of the frames done
+  // so far are written (atomically, no temporary left), run.json says why, exit 128 + 15.
+  const std::string dir = test::tempDir("run-sigterm");
+  const std::string out_dir = dir + "/out";
+  const std::string run = std::string(kTinyRun);
+  const std::string emf_cmd = cli() + run.substr(0, run.find("frames=3")) + "frames=5000" +
+                              run.substr(run.find("frames=3") + 8) +
+                              " --set output.write_images=true --out " + out_dir;
+  const std::string script = emf_cmd + " & pid=$!; i=0; while [ ! -e " + out_dir +
+                             "/images/000003-objects.png ] && [ $i -lt 1200 ]; do sleep 0.05; "
+                             "i=$((i+1)); done; kill -TERM $pid; wait $pid; echo \"rc=$?\"";
+  std::ofstream(dir + "/run.sh") << script << "\n";
+  std::string out;
+  ASSERT_EQ(test::runCommand("sh " + dir + "/run.sh", &out), 0) << out;
+  EXPECT_NE(out.find("rc=143"), std::string::npos) << out;
+  EXPECT_NE(out.find("interrupted by SIGTERM after"), std::string::npos) << out;
+  const size_t poses = io::readTrajectory(out_dir + "/camera.txt").size();
+  EXPECT_GE(poses, 4u);
+  EXPECT_LT(poses, 5000u);
+  EXPECT_TRUE(std::filesystem::exists(out_dir + "/background.ply"));
+  const nlohmann::json j = nlohmann::json::parse(readText(out_dir + "/run.json"));
+  EXPECT_EQ(j["frames"].get<size_t>(), poses);
+  EXPECT_NE(j["error"].get<std::string>().find("interrupted by SIGTERM"), std::string::npos);
+  for (const auto& e : std::filesystem::directory_iterator(out_dir)) {
+    EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
+  }
+}
+
 }  // namespace
 }  // namespace emf

@@ -201,6 +201,7 @@ TEST(FrameRing, PushCopiesFramesAndRejectsWrongSizes) {
   f.index = 17;
   f.timestamp = 1.5;
   f.rgb_timestamp = 1.52;
+  f.timestamp_text = "1.5000";  // as the source wrote it: names the dataset's files
   f.depth = cv::Mat(3, 4, CV_32F);
   for (int i = 0; i < 12; ++i) f.depth.ptr<float>()[i] = 0.25f * static_cast<float>(i);
   f.depth.at<float>(1, 2) = std::numeric_limits<float>::quiet_NaN();
@@ -211,6 +212,7 @@ TEST(FrameRing, PushCopiesFramesAndRejectsWrongSizes) {
   EXPECT_EQ(out.index, 17);
   EXPECT_EQ(out.timestamp, 1.5);
   EXPECT_EQ(out.rgb_timestamp, 1.52);
+  EXPECT_EQ(out.timestamp_text, "1.5000");
   ASSERT_EQ(out.depth.type(), CV_32FC1);
   for (int i = 0; i < 12; ++i) {
     const float a = f.depth.ptr<float>()[i], b = out.depth.ptr<float>()[i];
@@ -226,6 +228,17 @@ TEST(FrameRing, PushCopiesFramesAndRejectsWrongSizes) {
   } catch (const InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("depth image 4x4"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("sized at start-up"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(ring.stats().produced, 1u);
+
+  io::Frame long_text = f;
+  long_text.timestamp_text = std::string(kTimestampTextCapacity, '7');
+  try {
+    ring.push(long_text);
+    FAIL() << "expected InvalidArgument";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("frame 17: timestamp text"), std::string::npos)
+        << e.what();
   }
   EXPECT_EQ(ring.stats().produced, 1u);
 }

@@ -310,6 +310,17 @@ TEST(TumSource, BrokenFoldersGiveErrorsNamingFileAndLine) {
     EXPECT_EQ(s->intrinsics().fy, 501);
   }
   {
+    // A principal point far off the 8x6 image is not a camera (the map's ray walks would be
+    // unbounded): the error names the file.
+    MiniFolder m({"1.0", "2.0"}, {"1.0", "2.0"});
+    writeText(m.dir + "/calibration.txt", "10 11 1e9 3 8 6\n");
+    expectErrorContaining([&] { openSource("tum:" + m.dir, SourceOptions{}); },
+                          {m.dir + "/calibration.txt", "cx=1e+09", "principal point"});
+    writeText(m.dir + "/calibration.txt", "0.1 11 4 3 8 6\n");
+    expectErrorContaining([&] { openSource("tum:" + m.dir, SourceOptions{}); },
+                          {m.dir + "/calibration.txt", "1/20 of the image side"});
+  }
+  {
     MiniFolder m({"1.0"}, {"1.0"});
     writeText(m.dir + "/calibration.txt", "10 11 4 3 640 480\n");
     expectErrorContaining([&] { openSource("tum:" + m.dir, SourceOptions{}); },

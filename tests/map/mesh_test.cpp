@@ -172,6 +172,18 @@ TEST(Mesh, PlyBinaryAndAsciiRoundTripAtomically) {
   } catch (const IoError& e) {
     EXPECT_NE(std::string(e.what()).find("no/such/folder/m.ply"), std::string::npos) << e.what();
   }
+  // A target that is a folder: the rename's own error, not the clean-up's "Success".
+  std::filesystem::create_directories(dir + "/a_folder.ply");
+  try {
+    map::writePly(dir + "/a_folder.ply", m, true);
+    FAIL() << "expected IoError";
+  } catch (const IoError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("a_folder.ply"), std::string::npos) << what;
+    EXPECT_NE(what.find("Is a directory"), std::string::npos) << what;
+    EXPECT_EQ(what.find("Success"), std::string::npos) << what;
+  }
+  std::filesystem::remove(dir + "/a_folder.ply");
   // A truncated file is reported, not crashed on.
   {
     std::ofstream(dir + "/bad.ply") << "ply\nformat ascii 1.0\nelement vertex 5\n"

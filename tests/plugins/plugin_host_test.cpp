@@ -109,6 +109,26 @@ TEST(PluginHost, MalformedDetectionsAreDroppedGoodOneKept) {
   }
 }
 
+TEST(PluginHost, NewerPluginsLargerDetectionsAreSteppedBySize) {
+  // A plugin built against a header with fields appended to emf_detection: the host steps by
+  // its struct_size (by sizeof(emf_detection) it would read the second entry's class_name from
+  // the first one's appended fields and crash).
+  auto p = DetectorPlugin::load("test_newer", kTestPath, "", "", smallCamera());
+  const DetectorOutput out = p->detect(frame(0, "1.000000"));
+  EXPECT_TRUE(out.error.empty()) << out.error;
+  ASSERT_EQ(out.detections.size(), 2u);
+  EXPECT_EQ(out.detections[0].class_name, "cup");
+  EXPECT_FLOAT_EQ(out.detections[0].score, 0.9f);
+  EXPECT_EQ(out.detections[0].box, cv::Rect(20, 10, 30, 20));
+  EXPECT_EQ(out.detections[1].class_name, "car");
+  EXPECT_FLOAT_EQ(out.detections[1].score, 0.7f);
+  EXPECT_EQ(out.detections[1].box, cv::Rect(30, 10, 30, 20));
+  ASSERT_EQ(out.rejected.size(), 1u);
+  EXPECT_NE(out.rejected[0].find("detection 2: struct_size 64 differs from detections[0]'s"),
+            std::string::npos)
+      << out.rejected[0];
+}
+
 TEST(PluginHost, NewObjectsOnlyFlagIsReadWhenTheStructHasIt) {
   // Flag set and the struct covers it: read; the malformed plugin does not set it; a plugin
   // reporting the struct_size from before the flags field sets it in memory past its struct:

@@ -7,7 +7,10 @@
  *  5 "refuses": entry returns NULL for every host version.
  *  6 "newonly": sets EMF_DETECTOR_FLAG_NEW_OBJECTS_ONLY.
  *  7 "oldapi": sets the flag but reports the struct_size of a plugin built before the flags
- *     field existed: the host must not read it. */
+ *     field existed: the host must not read it.
+ *  8 "newer": built against a future header with two fields appended to emf_detection: the
+ *     host must step through the array by the plugin's struct_size. Two good detections, and a
+ *     third whose struct_size differs from the first's. */
 #include <emf/emf_detector.h>
 #include <math.h>
 #include <stddef.h>
@@ -20,12 +23,20 @@ EMF_DETECTOR_EXPORT int not_the_entry(void);
 EMF_DETECTOR_EXPORT int not_the_entry(void) { return 42; }
 #else
 
+/* emf_detection as a future header might have it. */
+typedef struct newer_detection {
+  emf_detection base;
+  int32_t track_id;
+  double extra;
+} newer_detection;
+
 struct emf_detector {
   int width, height;
   uint8_t* full_mask;
   uint8_t* small_mask;
   float* bad_probability;
   emf_detection dets[6];
+  newer_detection newer[3];
   emf_detection_result result;
 };
 
@@ -88,6 +99,17 @@ static emf_status detect(emf_detector* d, const emf_detector_frame* f, emf_detec
   d->result.struct_size = sizeof(d->result);
   d->result.count = 6;
   d->result.detections = d->dets;
+  if (TEST_PLUGIN_KIND == 8) {
+    for (x = 0; x < 3; ++x) {
+      d->newer[x].base = makeDetection(x == 0 ? "cup" : "car", x == 0 ? 0.9f : 0.7f, 20 + 10 * x,
+                                       10, 30, 20, w, h, d->full_mask, NULL);
+      d->newer[x].base.struct_size = x < 2 ? sizeof(newer_detection) : sizeof(emf_detection);
+      d->newer[x].track_id = 7;
+      d->newer[x].extra = -1.0;
+    }
+    d->result.count = 3;
+    d->result.detections = &d->newer[0].base;
+  }
   *out = &d->result;
   return EMF_OK;
 }
@@ -114,7 +136,7 @@ static const emf_detector_api kApi = {
     detect,
     release,
     destroy,
-    TEST_PLUGIN_KIND >= 6 ? EMF_DETECTOR_FLAG_NEW_OBJECTS_ONLY : 0u};
+    TEST_PLUGIN_KIND == 6 || TEST_PLUGIN_KIND == 7 ? EMF_DETECTOR_FLAG_NEW_OBJECTS_ONLY : 0u};
 
 EMF_DETECTOR_EXPORT const emf_detector_api* emf_detector_entry(uint32_t host_abi_version);
 EMF_DETECTOR_EXPORT const emf_detector_api* emf_detector_entry(uint32_t host_abi_version) {

@@ -9,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <mutex>
 #include <thread>
@@ -43,6 +44,7 @@ void makeFrame(int64_t i, io::Frame* f, int det_every) {
   f->index = i;
   f->timestamp = 100.0 + static_cast<double>(i) / 30.0;
   f->rgb_timestamp = f->timestamp;
+  f->timestamp_text = i % 5 == 4 ? "" : "t" + std::to_string(i);  // "" = the source has none
   f->depth = cv::Mat(kHeight, kWidth, CV_32FC1, cv::Scalar(static_cast<float>(kDepthOffsetM + i)));
   f->depth.at<float>(0, 1) = static_cast<float>(i * 0.5 + 2.0);
   f->color = cv::Mat(kHeight, kWidth, CV_8UC3, cv::Scalar(static_cast<double>(i % 256), 1, 2));
@@ -89,8 +91,17 @@ class FakeSource : public io::FrameSource {
 class FakeProcessor : public FrameProcessor {
  public:
   std::function<void(const io::Frame&)> before;  // runs first (gates, sleeps, throws)
+  bool check_timestamp_text = false;             // frames must carry makeFrame's timestamp text
   pipeline::FrameOutcome process(const io::Frame& frame) override {
     if (before) before(frame);
+    if (check_timestamp_text) {
+      // The source's timestamp text reaches the processor (detector plugins name files by it);
+      // without one the runtime writes the timestamp with 6 decimals.
+      char stamp[32];
+      std::snprintf(stamp, sizeof(stamp), "%.6f", frame.timestamp);
+      EXPECT_EQ(frame.timestamp_text,
+                frame.index % 5 == 4 ? std::string(stamp) : "t" + std::to_string(frame.index));
+    }
     pipeline::FrameOutcome o;
     o.index = processed_++;
     o.timestamp = frame.timestamp;
@@ -153,6 +164,7 @@ TEST(Runtime, BlockPolicyDeliversEveryFrameInOrderThenEndOfStream) {
   constexpr int kFrames = 300;
   FakeSource* src = new FakeSource(kFrames, 4);
   FakeProcessor proc;
+  proc.check_timestamp_text = true;
   std::mutex m;
   std::vector<int64_t> callback_indices;
   Runtime rt(std::unique_ptr<io::FrameSource>(src), proc, options("block", 3, kFrames),
@@ -318,6 +330,11 @@ TEST(Runtime, StopBeforeStartAndDestroyWithoutStart) {
     Runtime rt(std::make_unique<FakeSource>(5), proc, options("block", 2, 8));
   }  // destroyed without start: nothing to join
   Runtime rt(std::make_unique<FakeSource>(5), proc, options("block", 2, 8));
+  {
+    // Polling a runtime that was never started is a state error, not an endless timeout.
+    RuntimeResult r;
+    EXPECT_THROW(rt.poll(0.3, &r), StateError);
+  }
   rt.stop();
   EXPECT_EQ(rt.state(), RuntimeState::kStopped);
   EXPECT_THROW(rt.start(), StateError);
@@ -332,6 +349,10 @@ TEST(Runtime, EmptySourceEndsAtOnce) {
   std::vector<RuntimeResult> results;
   EXPECT_EQ(drain(rt, &results), PollStatus::kEndOfStream);
   EXPECT_TRUE(results.empty());
+  rt.start();  // after the end of the stream: a no-op
+  rt.stop();   // ... but after stop() start() is refused, whatever the state
+  EXPECT_EQ(rt.state(), RuntimeState::kEnded);
+  EXPECT_THROW(rt.start(), StateError);
 }
 
 TEST(Runtime, SourceErrorFailsAfterTheFramesBeforeIt) {
