@@ -98,6 +98,8 @@ std::optional<int> ArgParser::parse(const std::vector<std::string>& args) {
         if (i + 1 >= args.size()) return usageError("--" + name + " needs a value " + o->meta);
         value = args[++i];
       }
+      // An empty value would silently mean "not given" (e.g. --source '' running the default).
+      if (value.empty()) return usageError("--" + name + " needs a non-empty value " + o->meta);
       if (o->value) *o->value = value;
       if (o->values) o->values->push_back(value);
       continue;

@@ -53,6 +53,10 @@ int cmdEval(const std::vector<std::string>& args) {
   options.max_diff_s = parsePositive(max_diff, "max-diff");
   options.rpe_delta_s = parsePositive(delta, "delta");
   options.min_object_coverage = parsePositive(min_coverage, "min-coverage");
+  if (options.min_object_coverage > 1.0) {
+    throw InvalidArgument("--min-coverage is a fraction of the timestamps in [0, 1], got '" +
+                          min_coverage + "'");
+  }
 
   const io::EvalReport report = io::evaluatePaths(gt, est, options);
   std::printf("%s", io::formatReport(report).c_str());

@@ -3,8 +3,11 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -30,10 +33,16 @@ std::string joinChoices(const std::vector<std::string>& choices) {
   return s;
 }
 
+std::string lowerCase(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
 std::string closest(const std::string& key, const std::vector<std::string>& candidates) {
   std::string best;
   int best_d = 1 << 30;
   for (const auto& c : candidates) {
+    if (lowerCase(key) == lowerCase(c)) return c;  // only the case differs (keys are lower case)
     const int d = editDistance(key, c);
     if (d < best_d) {
       best_d = d;
@@ -49,6 +58,23 @@ std::string where(const std::string& origin, const YAML::Node& node) {
   const YAML::Mark m = node.Mark();
   if (m.line >= 0) return origin + ":" + std::to_string(m.line + 1);
   return origin;
+}
+
+/// YAML allows a key twice in a mapping and yaml-cpp keeps the first: a later override would be
+/// dropped without a word. `prefix` is "" for sections, "<section>." for keys.
+void rejectDuplicateKeys(const YAML::Node& mapping, const std::string& origin,
+                         const std::string& prefix) {
+  if (!mapping || !mapping.IsMap()) return;
+  std::map<std::string, YAML::Node> seen;
+  for (const auto& kv : mapping) {
+    const std::string k = kv.first.Scalar();
+    const auto it = seen.find(k);
+    if (it != seen.end()) {
+      throw ConfigError(where(origin, kv.first) + ": '" + prefix + k +
+                        "' is given twice (first at " + where(origin, it->second) + "): keep one");
+    }
+    seen.emplace(k, kv.first);
+  }
 }
 
 /// Reads one section of a YAML document into an options struct.
@@ -321,6 +347,7 @@ void Config::merge(const std::string& yaml, const std::string& origin) {
     throw ConfigError(origin + ": expected a mapping of sections (cl:, map:, track:, ...)");
   }
   const std::vector<std::string> sections = sectionNames();
+  rejectDuplicateKeys(root, origin, "");
   for (const auto& kv : root) {
     const std::string name = kv.first.Scalar();
     if (std::find(sections.begin(), sections.end(), name) == sections.end()) {
@@ -332,6 +359,7 @@ void Config::merge(const std::string& yaml, const std::string& origin) {
       throw ConfigError(where(origin, kv.second) + ": section '" + name +
                         "' must be a mapping of keys");
     }
+    rejectDuplicateKeys(kv.second, origin, name + ".");
   }
   forEachSection([&](const char* name, auto& options) {
     const YAML::Node section = root[name];
@@ -348,6 +376,11 @@ Config Config::loadString(const std::string& yaml, const std::string& origin) {
 }
 
 Config Config::loadFile(const std::string& path) {
+  if (std::filesystem::is_directory(path)) {
+    throw ConfigError(path +
+                      ": is a folder, not a configuration file (give a .yaml file; presets "
+                      "live in conf/)");
+  }
   std::ifstream in(path);
   if (!in) {
     throw ConfigError(path +

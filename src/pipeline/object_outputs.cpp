@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <map>
 #include <opencv2/imgproc.hpp>
+#include <regex>
+#include <set>
 
 #include "common/error.h"
 #include "common/log.h"
@@ -214,6 +216,30 @@ void ObjectOutputs::finish(const std::function<const map::Volume*(int id)>& volu
     if (const map::Volume* v = volume_of(id)) writeMesh(id, v->download());
   }
   writeTrajectories();
+  removeStaleObjectFiles();
+}
+
+void ObjectOutputs::removeStaleObjectFiles() const {
+  std::set<std::string> written;
+  for (const auto& [id, t] : tracks_) {
+    written.insert(t.summary.trajectory_file);
+    written.insert(t.summary.mesh_file);
+  }
+  static const std::regex kObjectFile("object-[0-9]+\\.(txt|ply)");
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir_, ec)) {
+    const std::string name = e.path().filename().string();
+    if (!e.is_regular_file() || !std::regex_match(name, kObjectFile) || written.count(name)) {
+      continue;
+    }
+    std::error_code rm;
+    std::filesystem::remove(e.path(), rm);
+    if (rm) {
+      logWarning(dir_, "/", name, " is from an earlier run and cannot be removed: ", rm.message());
+    } else {
+      logInfo("removed ", dir_, "/", name, ", an output of an earlier run in this folder");
+    }
+  }
 }
 
 void ObjectOutputs::writeTrajectories() {

@@ -88,10 +88,14 @@ class ObjectOutputs {
                         const std::vector<AssociationImage>& association);
 
   /// End of the run (or an interrupted run): writes object-<id>.ply for every object still alive
-  /// whose volume `volume_of(id)` returns (nullptr = skip), then every trajectory.
+  /// whose volume `volume_of(id)` returns (nullptr = skip), then every trajectory, then removes
+  /// an earlier run's object files (removeStaleObjectFiles).
   void finish(const std::function<const map::Volume*(int id)>& volume_of);
   /// Writes object-<id>.txt for every object tracked in at least one frame.
   void writeTrajectories();
+  /// Removes object-<id>.txt / .ply files in the folder that this run did not write (an earlier
+  /// run's objects would otherwise be scored by `emf eval` as this run's).
+  void removeStaleObjectFiles() const;
 
   /// Summaries of every object seen so far, by increasing id.
   std::vector<ObjectSummary> summaries() const;

@@ -34,6 +34,11 @@ TEST(Cli, UnknownFlagIsUsageError) {
   EXPECT_NE(out.find("usage: emf info"), std::string::npos) << out;
   EXPECT_EQ(test::runCommand(cli() + " info --config", &out), 2);
   EXPECT_NE(out.find("--config needs a value"), std::string::npos) << out;
+  // An empty value is not "not given" (it would run the default source, all frames, ...).
+  EXPECT_EQ(test::runCommand(cli() + " run --source '' --out x", &out), 2);
+  EXPECT_NE(out.find("--source needs a non-empty value"), std::string::npos) << out;
+  EXPECT_EQ(test::runCommand(cli() + " run --frames= --out x", &out), 2);
+  EXPECT_NE(out.find("--frames needs a non-empty value"), std::string::npos) << out;
 }
 
 TEST(Cli, EverySubcommandHasHelp) {

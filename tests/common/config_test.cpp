@@ -57,6 +57,26 @@ TEST(Config, UnknownSectionSuggestsClosest) {
   EXPECT_NE(e.find("did you mean 'track'"), std::string::npos) << e;
 }
 
+TEST(Config, WrongCaseSuggestsTheKeyItself) {
+  const std::string e = errorOf("MAP:\n  memory_mb: 3\n");
+  EXPECT_NE(e.find("did you mean 'map'"), std::string::npos) << e;
+  const std::string k = errorOf("map:\n  Memory_MB: 3\n");
+  EXPECT_NE(k.find("did you mean 'map.memory_mb'"), std::string::npos) << k;
+}
+
+TEST(Config, DuplicateKeysAndSectionsAreErrorsNamingBothLines) {
+  // yaml-cpp keeps the first of two equal keys: the later one would be dropped silently.
+  const std::string k = errorOf("map:\n  memory_mb: 100\n  memory_mb: 200\n", "d.yaml");
+  EXPECT_NE(k.find("d.yaml:3: 'map.memory_mb' is given twice (first at d.yaml:2)"),
+            std::string::npos)
+      << k;
+  const std::string s = errorOf(
+      "map:\n  memory_mb: 64\ntrack:\n  pixel_stride: 1\nmap:\n"
+      "  memory_mb: 128\n",
+      "d.yaml");
+  EXPECT_NE(s.find("d.yaml:5: 'map' is given twice (first at d.yaml:1)"), std::string::npos) << s;
+}
+
 TEST(Config, OutOfRangeNamesRange) {
   const std::string e = errorOf("em:\n  alpha: 1.5\n");
   EXPECT_NE(e.find("em.alpha"), std::string::npos) << e;
@@ -139,6 +159,16 @@ TEST(Config, MissingFileNamesIt) {
     FAIL();
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/emf.yaml"), std::string::npos);
+  }
+  // A folder opens as an empty stream: it must not pass as an empty configuration.
+  const std::string dir = test::tempDir("config-folder");
+  try {
+    Config::loadFile(dir);
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("is a folder, not a configuration file"),
+              std::string::npos)
+        << e.what();
   }
 }
 

@@ -332,6 +332,13 @@ TEST(EvalCli, UsageAndErrors) {
                              &text),
             1);
   EXPECT_NE(text.find("--delta must be a non-negative number"), std::string::npos) << text;
+  EXPECT_EQ(
+      test::runCommand(cli() + " eval --gt " + refGt() + " --est " + refEst() + " --min-coverage 2",
+                       &text),
+      1);
+  EXPECT_NE(text.find("--min-coverage is a fraction of the timestamps in [0, 1], got '2'"),
+            std::string::npos)
+      << text;
 }
 
 }  // namespace

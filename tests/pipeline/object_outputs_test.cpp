@@ -4,6 +4,7 @@
 #include "pipeline/object_outputs.h"
 
 #include <filesystem>
+#include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -81,6 +82,25 @@ TEST(ObjectOutputs, TrajectoriesHoldTrackedFramesOnly) {
   const io::Trajectory cup = io::readTrajectory(dir + "/object-2.txt");
   ASSERT_EQ(cup.size(), 2u);
   EXPECT_TRUE(cup.poses[1].isApprox(pose(13.0, 1.3), kTumPoseTolerance));
+}
+
+TEST(ObjectOutputs, AnEarlierRunsObjectFilesAreRemovedOthersKept) {
+  // A folder that held a run with objects 1 and 7: this run tracks objects 1 and 2, so
+  // object-7.* would be scored by `emf eval` as this run's. Unrelated files stay.
+  const std::string dir = test::tempDir("objout-stale");
+  for (const char* name :
+       {"object-1.txt", "object-7.txt", "object-7.ply", "object-7.txt.bak", "notes.txt"}) {
+    std::ofstream(dir + "/" + name) << "old\n";
+  }
+  ObjectOutputs out(dir, true);
+  for (const FrameOutcome& f : sequence()) out.add(f);
+  out.finish(nullptr);
+  EXPECT_EQ(io::readTrajectory(dir + "/object-1.txt").size(), 4u);  // rewritten
+  EXPECT_TRUE(std::filesystem::exists(dir + "/object-2.txt"));
+  EXPECT_FALSE(std::filesystem::exists(dir + "/object-7.txt"));
+  EXPECT_FALSE(std::filesystem::exists(dir + "/object-7.ply"));
+  EXPECT_TRUE(std::filesystem::exists(dir + "/object-7.txt.bak"));
+  EXPECT_TRUE(std::filesystem::exists(dir + "/notes.txt"));
 }
 
 TEST(ObjectOutputs, SummariesAndTheirJson) {
