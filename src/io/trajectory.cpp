@@ -32,6 +32,9 @@ std::optional<Eigen::Isometry3d> poseFromTum(double tx, double ty, double tz, do
   return T;
 }
 
+/// Positions farther from the origin than this (metres) are not a camera trajectory.
+constexpr double kMaxCoordinateM = 1e6;
+
 Trajectory readTrajectory(const std::string& path) {
   Trajectory traj;
   traj.source = path;
@@ -40,6 +43,14 @@ Trajectory readTrajectory(const std::string& path) {
     double v[8];
     static const char* kNames[8] = {"timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
     for (int i = 0; i < 8; ++i) v[i] = parseFinite(row.fields[i], path, row.line, kNames[i]);
+    for (int i = 1; i <= 3; ++i) {
+      // Squared in the statistics: 1e308 would turn every figure into inf.
+      if (std::abs(v[i]) > kMaxCoordinateM) {
+        throw IoError(fileLine(path, row.line) + ": " + kNames[i] + " = " + row.fields[i] +
+                      " m is beyond +-" + std::to_string(static_cast<int>(kMaxCoordinateM)) +
+                      " m: not a camera position; fix or remove that line");
+      }
+    }
     const auto pose = poseFromTum(v[1], v[2], v[3], v[4], v[5], v[6], v[7]);
     if (!pose) {
       const double n = std::sqrt(v[4] * v[4] + v[5] * v[5] + v[6] * v[6] + v[7] * v[7]);

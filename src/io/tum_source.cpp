@@ -112,13 +112,16 @@ Intrinsics resolveIntrinsics(const SourceOptions& options, const std::string& ca
   }
   k.width = size.width;
   k.height = size.height;
-  try {
-    return checkedIntrinsics(k);
-  } catch (const InvalidArgument& e) {
-    const bool from_file = given == 0;
-    throw IoError((from_file ? calibration_path : what + " (URI query / source.* config)") + ": " +
-                  e.what());
+  // A calibration file's values are checked here, so the error names the file; values from the
+  // URI or the configuration are checked (and named) when the SLAM starts.
+  if (given == 0) {
+    try {
+      checkedIntrinsics(k);
+    } catch (const InvalidArgument& e) {
+      throw IoError(calibration_path + ": " + e.what());
+    }
   }
+  return k;
 }
 
 TumSource::TumSource(const std::string& dir, const SourceOptions& options)

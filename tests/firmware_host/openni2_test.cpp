@@ -193,6 +193,23 @@ TEST(Openni2Virtual, RecordingEndsAfterLastFrameAnd100umDepth) {
   EXPECT_FALSE(src.next(f));
 }
 
+TEST(Openni2Virtual, ABrokenFileIsADroppedFrameReportedOnStderr) {
+  // As a real sensor the device drops the frame, but it says which file and why.
+  const std::string dir = makeTinyFolder(4);
+  std::ofstream(dir + "/depth/000002.png", std::ios::trunc) << "not a png";
+  io::SourceOptions options;
+  Openni2Source src("openni2:emf-virtual://" + dir + ";speed=0", options);
+  testing::internal::CaptureStderr();
+  std::vector<std::string> stamps;
+  io::Frame f;
+  while (src.next(f)) stamps.push_back(f.timestamp_text);
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(stamps, (std::vector<std::string>{"1305031102.000000", "1305031102.100000",
+                                              "1305031102.300000"}));
+  EXPECT_NE(err.find("emf-virtual: frame 2 dropped: "), std::string::npos) << err;
+  EXPECT_NE(err.find("000002.png"), std::string::npos) << err;
+}
+
 TEST(Openni2Virtual, RealTimeDeviceFramesMatchTheirPngs) {
   const std::string dir = kitchen();
   const TumList depth_list = readList(dir + "/depth.txt");

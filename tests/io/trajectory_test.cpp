@@ -97,6 +97,9 @@ TEST(Trajectory, BadLinesNameFileAndLine) {
   expectErrorContaining([&] { readTrajectory(p); }, {p + ":2", "tz is 'nan'"});
   writeText(p, "1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 0 0.5\n");
   expectErrorContaining([&] { readTrajectory(p); }, {p + ":2", "norm 0.5", "not a rotation"});
+  writeText(p, "1.0 0 0 0 0 0 0 1\n2.0 0 1e308 0 0 0 0 1\n");
+  expectErrorContaining([&] { readTrajectory(p); },
+                        {p + ":2", "ty = 1e308 m is beyond +-1000000 m"});
   writeText(p, "1.0 0 0 0 0 0 0 1\n\n1.0 0 0 0 0 0 0 1\n");
   expectErrorContaining([&] { readTrajectory(p); }, {p + ":3", "does not increase"});
   expectErrorContaining([&] { readTrajectory(dir + "/missing.txt"); },

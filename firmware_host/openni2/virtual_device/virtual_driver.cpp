@@ -30,6 +30,7 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -439,6 +440,21 @@ class VirtualDevice : public oni::driver::DeviceBase {
     }
   }
 
+  /// A broken file is a dropped frame, as on a real sensor, but never a silent one: the OpenNI2
+  /// log is off by default, so stderr gets the file and what to do too.
+  void dropped(int64_t k, const std::string& why) {
+    services_.errorLoggerAppend("emf-virtual: frame %lld dropped: %s", static_cast<long long>(k),
+                                why.c_str());
+    std::fprintf(stderr, "emf-virtual: frame %lld dropped: %s\n", static_cast<long long>(k),
+                 why.c_str());
+  }
+
+  static std::string wrongSize(const std::string& file, int w, int h, const OniVideoMode& mode) {
+    return file + " is " + std::to_string(w) + "x" + std::to_string(h) + ", the device streams " +
+           std::to_string(mode.resolutionX) + "x" + std::to_string(mode.resolutionY) +
+           " (every image of a stream must have the size of the folder's first one)";
+  }
+
   /// Decodes frame k and hands it to every started stream. mutex_ must be held.
   void emitLocked(int64_t k) {
     const TumFolder& f = entry_.folder;
@@ -453,10 +469,13 @@ class VirtualDevice : public oni::driver::DeviceBase {
       if (s->type() == ONI_SENSOR_DEPTH) {
         int w = 0, h = 0;
         if (!readDepthPng(f.depth_files[i], &depth_, &w, &h, &error)) {
-          services_.errorLoggerAppend("emf-virtual: %s", error.c_str());
+          dropped(k, error + " (fix or remove the file)");
           continue;
         }
-        if (w != depth_mode_.resolutionX || h != depth_mode_.resolutionY) continue;
+        if (w != depth_mode_.resolutionX || h != depth_mode_.resolutionY) {
+          dropped(k, wrongSize(f.depth_files[i], w, h, depth_mode_));
+          continue;
+        }
         if (depth_mode_.pixelFormat == ONI_PIXEL_FORMAT_DEPTH_100_UM) {
           // Units of 100 um: value * 10000 / scale (exact for TUM's 5000 and for 10000).
           const double k100 = 10000.0 / f.depth_scale;
@@ -472,10 +491,13 @@ class VirtualDevice : public oni::driver::DeviceBase {
         if (j < 0) continue;
         int w = 0, h = 0;
         if (!readColorRgb(f.rgb_files[static_cast<size_t>(j)], &rgb_, &w, &h, &error)) {
-          services_.errorLoggerAppend("emf-virtual: %s", error.c_str());
+          dropped(k, error + " (fix or remove the file)");
           continue;
         }
-        if (w != color_mode_.resolutionX || h != color_mode_.resolutionY) continue;
+        if (w != color_mode_.resolutionX || h != color_mode_.resolutionY) {
+          dropped(k, wrongSize(f.rgb_files[static_cast<size_t>(j)], w, h, color_mode_));
+          continue;
+        }
         const uint64_t ts = static_cast<uint64_t>(
             std::llround((f.rgb_timestamps_s[static_cast<size_t>(j)] + offset_s) * 1e6));
         s->deliver(rgb_.data(), static_cast<int>(rgb_.size()), ts, frame_index);
