@@ -346,11 +346,10 @@ int main(int argc, char** argv) {
       const auto& mem = run.at("memory");
       std::printf(
           "emf:   ATE %s cm over %zu poses (%d lost), %s ms/frame median, %s p90, "
-          "peak RSS %.0f MB, pool %.0f MB (%lld of %lld blocks used), wall %.1f s\n",
+          "peak RSS %.0f MB, pool %.0f MB (%lld of %lld slots used), wall %.1f s\n",
           fmt(e.ate_cm, 3).c_str(), e.poses, e.lost, fmt(e.ms).c_str(), fmt(e.p90_ms).c_str(),
           e.rss_mb, mem.at("pool_bytes").get<double>() / (1 << 20),
-          mem.at("used_blocks").get<long long>(), mem.at("pool_blocks").get<long long>(),
-          er.wall_s);
+          mem.at("used_slots").get<long long>(), mem.at("pool_slots").get<long long>(), er.wall_s);
       std::printf("       stages (median / p90 ms):");
       for (const auto& [stage, s] : run.at("ms_per_frame").items()) {
         if (stage == "total") continue;

@@ -1,6 +1,8 @@
 /* emf — public C types: status codes, images, intrinsics, poses.
  * C99, no third-party headers. Every struct that may grow starts with `struct_size`
- * (set it to sizeof(the struct) you were compiled with) so fields can be appended. */
+ * (set it to sizeof(the struct) you were compiled with) so fields can be appended. The smallest
+ * struct_size emf accepts is the struct's size in the first release (this header's: no field
+ * has been appended yet); emf writes or reads the fields a caller's struct_size covers. */
 #ifndef EMF_TYPES_H
 #define EMF_TYPES_H
 

@@ -332,9 +332,10 @@ EMF_API emf_status emf_system_set_intrinsics(emf_system* system, const emf_intri
           std::isfinite(k.cx) && std::isfinite(k.cy) && k.width > 0 && k.height > 0)) {
       return fail(EMF_ERROR_INVALID_ARGUMENT,
                   std::string(fn) + ": intrinsics fx=" + std::to_string(k.fx) +
-                      " fy=" + std::to_string(k.fy) + " width=" + std::to_string(k.width) +
+                      " fy=" + std::to_string(k.fy) + " cx=" + std::to_string(k.cx) +
+                      " cy=" + std::to_string(k.cy) + " width=" + std::to_string(k.width) +
                       " height=" + std::to_string(k.height) +
-                      ": focal lengths and the image size must be positive");
+                      ": focal lengths and the image size must be positive, all finite");
     }
     emf::io::Intrinsics in;
     in.fx = k.fx;

@@ -156,6 +156,13 @@ int cmdRun(const std::vector<std::string>& args) {
     std::printf("  %-10s %7.2f ms median  %7.2f ms p90\n", stage.c_str(), s.at(stage).median_ms,
                 s.at(stage).p90_ms);
   }
+  if (slam.backgroundPoolFullFrames() > 0 || slam.poolRefusedObjects() > 0) {
+    std::printf(
+        "voxel pool full: background blocks dropped on %lld frame(s), %lld object(s) not "
+        "created: the map is incomplete; raise map.memory_mb (%d MiB)\n",
+        static_cast<long long>(slam.backgroundPoolFullFrames()),
+        static_cast<long long>(slam.poolRefusedObjects()), config.map.memory_mb);
+  }
   std::printf("outputs in %s: camera.txt background.ply run.json, %zu object(s)%s\n",
               std::filesystem::absolute(out_dir).string().c_str(), info.objects->size(),
               config.output.write_images ? ", images/" : "");

@@ -57,6 +57,9 @@ struct ObjectOptions {
   /// re-creates it where it is. 0 = never (the paper has no such rule).
   int max_lost_frames = 15;
   int max_objects = 8;
+  /// An object is not created when its first integration leaves less than this fraction of the
+  /// voxel pool free: the background (and the objects' growth) keep room in a fixed pool.
+  double min_free_pool_fraction = 0.25;
   bool free_space_full_weight = false;
   bool filter_depth = false;
   /// With filter_depth off, the E-step, object tracking and object creation read the raw depth
@@ -136,6 +139,9 @@ struct ObjectOptions {
            "with filter_depth off: the objects' bilateral range sigma");
     b.integer("max_objects", max_objects, 0, 64, "",
               "object volumes alive at once (sizes the per-frame buffers)");
+    b.real("min_free_pool_fraction", min_free_pool_fraction, 0.0, 1.0, "",
+           "no object is created when it would leave less than this fraction of the voxel pool "
+           "free (room for the background; 0 = off)");
     b.integer("max_grow_blocks", max_grow_blocks, 0, 64, "blocks",
               "most blocks an object volume grows per side on one detection");
     b.real("creation_depth_jump_m", creation_depth_jump_m, 0.0, 10.0, "m",

@@ -29,9 +29,12 @@ struct MapOptions {
   double raycast_step_fraction = 0.8;
 
   void bind(OptionBinder& b) {
-    b.integer("memory_mb", memory_mb, 1, 65536, "MiB", "voxel-block pool budget, all volumes");
+    // 8191 MiB: what the pool's 32-bit voxel index addresses (VoxelPool::kMaxSlots); the device
+    // may allow less (checked when the pool is allocated).
+    b.integer("memory_mb", memory_mb, 1, 8191, "MiB", "voxel-block pool budget, all volumes");
     b.real("background_voxel_m", background_voxel_m, 0.001, 0.5, "m", "background voxel size");
-    b.integer("background_resolution", background_resolution, 8, 8192, "voxels",
+    // 4096: a grid of 512^3 blocks, the most a volume's index grid holds (2^27 blocks).
+    b.integer("background_resolution", background_resolution, 8, 4096, "voxels",
               "background extent per axis");
     b.real("truncation_voxels", truncation_voxels, 1.0, 100.0, "voxels", "TSDF truncation");
     b.real("max_weight", max_weight, 1.0, 127.0, "", "TSDF weight cap W_max (storage limit 127)");

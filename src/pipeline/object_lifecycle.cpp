@@ -3,6 +3,7 @@
 // The rules themselves are the pure functions of em/object_rules.h.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "common/log.h"
 #include "pipeline/slam_system.h"
@@ -124,7 +125,18 @@ void SlamSystem::integrateAll() {
     ctx_.write(new_weights_, w.data, w.total() * sizeof(float));
     in.weights = &new_weights_;
   }
-  counters_.add("integrated_blocks", background_->fuse(in).listed_blocks);
+  const map::AllocationReport background = background_->fuse(in);
+  counters_.add("integrated_blocks", background.listed_blocks);
+  if (background.dropped_blocks > 0) {
+    // Logged the first time and every 100th frame: a full pool is a state, not an event.
+    if (background_pool_full_frames_++ % 100 == 0) {
+      logWarning("frame ", frames_, ": voxel pool full: ", background.dropped_blocks,
+                 " background blocks found no slot (", background_pool_full_frames_,
+                 " frame(s) so far); the map is incomplete and tracking may drift: raise "
+                 "map.memory_mb (",
+                 config_.map.memory_mb, " MiB) or coarsen map.background_voxel_m");
+    }
+  }
   for (TrackedObject& o : objects_) {
     if (o.state != ObjectState::kTracked || !have_q || o.first_frame == frames_) continue;
     map::IntegrationInput oi = in;
@@ -136,9 +148,10 @@ void SlamSystem::integrateAll() {
     }
     const map::AllocationReport r = o.volume->fuse(oi);
     counters_.add("integrated_blocks", r.listed_blocks);
-    if (r.dropped_blocks > 0) {
+    if (r.dropped_blocks > 0 && o.pool_full_frames++ % 100 == 0) {
       logWarning("frame ", frames_, ": object ", o.id, ": ", r.dropped_blocks,
-                 " blocks found no slot (voxel pool full: raise map.memory_mb)");
+                 " blocks found no slot (", o.pool_full_frames,
+                 " frame(s) so far; voxel pool full: raise map.memory_mb)");
     }
   }
 }
@@ -290,7 +303,6 @@ bool SlamSystem::createObject(const io::Detection& d, const cv::Mat& vertex) {
   T_world_volume.translation() =
       placement.centre_world - Eigen::Vector3d::Constant(spec.extentM().x() / 2.0);
   TrackedObject o;
-  o.id = next_object_id_++;
   o.class_name = d.class_name;
   o.rendered = d.class_name != "person";
   o.volume = std::make_unique<map::Volume>(*pool_, spec, T_world_volume);
@@ -308,6 +320,27 @@ bool SlamSystem::createObject(const io::Detection& d, const cv::Mat& vertex) {
   in.fg_mask = &fg_mask_;
   const map::AllocationReport r = o.volume->fuse(in);
   counters_.add("integrated_blocks", r.listed_blocks);
+  // A fixed pool: an object that would crowd out the background (or got no slot at all) is not
+  // created; its volume and blocks go back to the pool here.
+  const map::PoolStats pool = pool_->stats();
+  const double free_fraction =
+      pool.capacity_slots > 0 ? static_cast<double>(pool.free_slots) / pool.capacity_slots : 0.0;
+  if (r.allocated_blocks == 0 || free_fraction < opt.min_free_pool_fraction) {
+    if (pool_refused_objects_++ % 20 == 0) {
+      char fractions[96];
+      std::snprintf(fractions, sizeof(fractions), "%.0f %% of the voxel pool free (below %.0f %%",
+                    100.0 * free_fraction, 100.0 * opt.min_free_pool_fraction);
+      const std::string why = r.allocated_blocks == 0 ? std::string("the voxel pool is full")
+                                                      : std::string("it would leave ") + fractions +
+                                                            ", objects.min_free_pool_fraction)";
+      logWarning("frame ", frames_, ": no object created for '", d.class_name, "' (",
+                 placement.resolution, "^3 voxels, ", r.allocated_blocks, " blocks): ", why, " (",
+                 pool_refused_objects_, " refused so far): raise map.memory_mb (",
+                 config_.map.memory_mb, " MiB) or lower objects.resolution");
+    }
+    return false;
+  }
+  o.id = next_object_id_++;
   logInfo("frame ", frames_, ": object ", o.id, " ('", o.class_name,
           "') created: ", placement.resolution, "^3 voxels of ", placement.voxel_size_m * 100,
           " cm at (", placement.centre_world.transpose(), "), ", r.allocated_blocks, " blocks");

@@ -94,10 +94,12 @@ std::string runSummaryJson(const SlamSystem& slam, const cl::Context& ctx, const
   j["work_per_frame"] = work;
   const map::PoolStats pool = slam.pool().stats();
   j["memory"] = {{"pool_bytes", pool.pool_bytes},
-                 {"pool_blocks", pool.capacity_slots},
-                 {"used_blocks", pool.used_slots},
+                 {"pool_slots", pool.capacity_slots},
+                 {"used_slots", pool.used_slots},
                  {"occupancy", pool.occupancy()},
                  {"dropped_blocks", pool.dropped_blocks},
+                 {"background_pool_full_frames", slam.backgroundPoolFullFrames()},
+                 {"objects_refused_for_pool", slam.poolRefusedObjects()},
                  {"background_index_bytes", slam.background().indexBytes()}};
   j["device"] = {{"name", ctx.device().device_name},
                  {"platform", ctx.device().platform_name},

@@ -93,8 +93,9 @@ struct TrackedObject {
   em::Existence existence;
   int64_t first_frame = 0, last_frame = 0;
   ObjectState state = ObjectState::kTracked;
-  int lost_frames = 0;  // consecutive frames its tracking failed (with the camera tracked)
-  int e_step_slot = 0;  // index of this object in the current E-step (1..)
+  int lost_frames = 0;       // consecutive frames its tracking failed (with the camera tracked)
+  int pool_full_frames = 0;  // frames on which some of its blocks found no slot in the pool
+  int e_step_slot = 0;       // index of this object in the current E-step (1..)
 };
 
 class SlamSystem {
@@ -155,6 +156,11 @@ class SlamSystem {
   const io::Intrinsics& intrinsics() const { return intrinsics_; }
   int64_t framesProcessed() const { return frames_; }
   int64_t framesLost() const { return lost_; }
+  /// Frames on which the background could not get a slot for every block it needed (its map is
+  /// incomplete there: map.memory_mb is too small for the scene).
+  int64_t backgroundPoolFullFrames() const { return background_pool_full_frames_; }
+  /// Objects not created because the pool had too little room (objects.min_free_pool_fraction).
+  int64_t poolRefusedObjects() const { return pool_refused_objects_; }
 
  private:
   /// Per-frame helpers (object_lifecycle.cpp).
@@ -218,6 +224,8 @@ class SlamSystem {
   Eigen::Isometry3d last_motion_ = Eigen::Isometry3d::Identity();  // T_prev_curr of the last frame
   int64_t frames_ = 0;
   int64_t lost_ = 0;
+  int64_t background_pool_full_frames_ = 0;  // frames on which background blocks found no slot
+  int64_t pool_refused_objects_ = 0;         // creations refused for want of pool room
 };
 
 }  // namespace emf::pipeline

@@ -82,7 +82,7 @@ TEST(Config, OutOfRangeNamesRange) {
   EXPECT_NE(e.find("em.alpha"), std::string::npos) << e;
   EXPECT_NE(e.find("out of range [0, 1]"), std::string::npos) << e;
   const std::string e2 = errorOf("map:\n  memory_mb: 0\n");
-  EXPECT_NE(e2.find("[1, 65536] MiB"), std::string::npos) << e2;
+  EXPECT_NE(e2.find("[1, 8191] MiB"), std::string::npos) << e2;
 }
 
 TEST(Config, WrongTypeIsAnError) {

@@ -206,7 +206,7 @@ TEST(Openni2Virtual, ABrokenFileIsADroppedFrameReportedOnStderr) {
   const std::string err = testing::internal::GetCapturedStderr();
   EXPECT_EQ(stamps, (std::vector<std::string>{"1305031102.000000", "1305031102.100000",
                                               "1305031102.300000"}));
-  EXPECT_NE(err.find("emf-virtual: frame 2 dropped: "), std::string::npos) << err;
+  EXPECT_NE(err.find("emf-virtual: frame 2: depth image dropped: "), std::string::npos) << err;
   EXPECT_NE(err.find("000002.png"), std::string::npos) << err;
 }
 

@@ -130,6 +130,9 @@ TEST(SlamObjects, PerfectAssociationTracksTheCar) {
 struct CarsRun {
   double camera_ate_m = 0;
   int created = 0;                        // objects created over the run
+  int64_t lost = 0;                       // camera frames lost
+  int64_t refused = 0;                    // objects not created for want of pool room
+  int64_t pool_full_frames = 0;           // frames the background found no slot for a block
   std::map<int, double> ate_m, coverage;  // per ground-truth car: best estimate (emf eval rule)
 };
 
@@ -174,6 +177,9 @@ CarsRun runCars(const Config& config, int frames, bool source_detections) {
     }
   }
   run.camera_ate_m = io::computeAte(camera_gt, camera_est).trans_m.rmse;
+  run.lost = slam.framesLost();
+  run.refused = slam.poolRefusedObjects();
+  run.pool_full_frames = slam.backgroundPoolFullFrames();
   std::printf("camera ATE %.4f m, %lld lost, %d objects created\n", run.camera_ate_m,
               static_cast<long long>(slam.framesLost()), run.created);
   // Each ground-truth car is matched to the estimate with the lowest ATE among those covering
@@ -233,6 +239,27 @@ TEST(SlamObjects, MotionDetectorFindsBothCars) {
     EXPECT_LT(ate, kMotionObjectAteM) << "car " << gid;
     EXPECT_GE(run.coverage.at(gid), kMotionCoverage) << "car " << gid;
   }
+}
+
+// A fixed pool of 8 MiB (4096 slots; this background takes ~2200 of them): a car at 256^3
+// voxels would need every slot, so it is not created and the camera keeps its map and its
+// accuracy (before the rule: 149 of 150 frames lost on `occlusion`). At 4 MiB the background
+// itself does not fit: the frames it lost blocks on are counted (run.json, log).
+TEST(SlamObjects, AFullPoolRefusesObjectsAndCountsBackgroundDrops) {
+  Config config = smallConfig();
+  config.map.memory_mb = 8;
+  config.objects.resolution = 256;
+  const CarsRun big = runCars(config, 30, true);
+  EXPECT_EQ(big.created, 0);
+  EXPECT_GE(big.refused, 1);
+  EXPECT_EQ(big.pool_full_frames, 0);
+  EXPECT_EQ(big.lost, 0);
+  EXPECT_LT(big.camera_ate_m, kCameraAteM);
+
+  config.objects.resolution = Config{}.objects.resolution;
+  config.map.memory_mb = 4;
+  const CarsRun small = runCars(config, 30, true);
+  EXPECT_GT(small.pool_full_frames, 0);
 }
 
 }  // namespace

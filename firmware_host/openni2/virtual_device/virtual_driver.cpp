@@ -442,11 +442,11 @@ class VirtualDevice : public oni::driver::DeviceBase {
 
   /// A broken file is a dropped frame, as on a real sensor, but never a silent one: the OpenNI2
   /// log is off by default, so stderr gets the file and what to do too.
-  void dropped(int64_t k, const std::string& why) {
-    services_.errorLoggerAppend("emf-virtual: frame %lld dropped: %s", static_cast<long long>(k),
-                                why.c_str());
-    std::fprintf(stderr, "emf-virtual: frame %lld dropped: %s\n", static_cast<long long>(k),
-                 why.c_str());
+  void dropped(int64_t k, const char* stream, const std::string& why) {
+    services_.errorLoggerAppend("emf-virtual: frame %lld: %s image dropped: %s",
+                                static_cast<long long>(k), stream, why.c_str());
+    std::fprintf(stderr, "emf-virtual: frame %lld: %s image dropped: %s\n",
+                 static_cast<long long>(k), stream, why.c_str());
   }
 
   static std::string wrongSize(const std::string& file, int w, int h, const OniVideoMode& mode) {
@@ -469,11 +469,11 @@ class VirtualDevice : public oni::driver::DeviceBase {
       if (s->type() == ONI_SENSOR_DEPTH) {
         int w = 0, h = 0;
         if (!readDepthPng(f.depth_files[i], &depth_, &w, &h, &error)) {
-          dropped(k, error + " (fix or remove the file)");
+          dropped(k, "depth", error + " (fix or remove the file)");
           continue;
         }
         if (w != depth_mode_.resolutionX || h != depth_mode_.resolutionY) {
-          dropped(k, wrongSize(f.depth_files[i], w, h, depth_mode_));
+          dropped(k, "depth", wrongSize(f.depth_files[i], w, h, depth_mode_));
           continue;
         }
         if (depth_mode_.pixelFormat == ONI_PIXEL_FORMAT_DEPTH_100_UM) {
@@ -491,11 +491,11 @@ class VirtualDevice : public oni::driver::DeviceBase {
         if (j < 0) continue;
         int w = 0, h = 0;
         if (!readColorRgb(f.rgb_files[static_cast<size_t>(j)], &rgb_, &w, &h, &error)) {
-          dropped(k, error + " (fix or remove the file)");
+          dropped(k, "colour", error + " (fix or remove the file)");
           continue;
         }
         if (w != color_mode_.resolutionX || h != color_mode_.resolutionY) {
-          dropped(k, wrongSize(f.rgb_files[static_cast<size_t>(j)], w, h, color_mode_));
+          dropped(k, "colour", wrongSize(f.rgb_files[static_cast<size_t>(j)], w, h, color_mode_));
           continue;
         }
         const uint64_t ts = static_cast<uint64_t>(
