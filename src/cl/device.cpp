@@ -1,7 +1,11 @@
 #include "cl/device.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
+#include <cstdlib>
+#include <filesystem>
 #include <sstream>
 
 #include "cl/cl_error.h"
@@ -94,13 +98,36 @@ std::vector<DeviceInfo> listDevices() {
   return out;
 }
 
+std::string noDeviceAdvice() {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::exists("/etc/OpenCL/vendors/pocl.icd", ec)) {
+    // PoCL's cache folder: POCL_CACHE_DIR, else $XDG_CACHE_HOME/pocl, else $HOME/.cache/pocl.
+    std::string cache;
+    if (const char* d = std::getenv("POCL_CACHE_DIR"); d && *d) {
+      cache = d;
+    } else if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x) {
+      cache = std::string(x) + "/pocl";
+    } else if (const char* h = std::getenv("HOME"); h && *h) {
+      cache = std::string(h) + "/.cache/pocl";
+    }
+    // The nearest existing folder on the way must be writable for PoCL to create the cache.
+    fs::path p = cache;
+    while (!p.empty() && !fs::exists(p, ec)) p = p.parent_path();
+    if (cache.empty() || p.empty() || !fs::is_directory(p, ec) || ::access(p.c_str(), W_OK) != 0) {
+      return "PoCL is installed but cannot create its kernel cache folder '" +
+             (cache.empty() ? std::string("(HOME unset)") : cache) +
+             "' and then reports no device: set POCL_CACHE_DIR (or HOME) to a writable folder";
+    }
+  }
+  return "no ICD is installed or none reports a device; install pocl-opencl-icd (CPU device) or "
+         "your GPU vendor's OpenCL driver (scripts/install_deps.sh does it)";
+}
+
 DeviceSelection selectDevice(const ClOptions& options) {
   const std::vector<DeviceInfo> devices = listDevices();
   if (devices.empty()) {
-    throw ClError(CL_DEVICE_NOT_FOUND,
-                  "no OpenCL device found: no ICD is installed or none reports a device; install "
-                  "pocl-opencl-icd (CPU device) or your GPU vendor's OpenCL driver "
-                  "(scripts/install_deps.sh does it)");
+    throw ClError(CL_DEVICE_NOT_FOUND, "no OpenCL device found: " + noDeviceAdvice());
   }
   const bool has_preference =
       !options.platform.empty() || !options.device.empty() || options.device_type != "any";

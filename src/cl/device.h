@@ -34,6 +34,11 @@ struct DeviceInfo {
 /// platform (no ICD installed).
 std::vector<DeviceInfo> listDevices();
 
+/// What to do when listDevices() is empty: install an ICD, or, when PoCL's ICD is installed but
+/// PoCL cannot create its kernel cache folder (it then reports no platform), make that folder
+/// writable.
+std::string noDeviceAdvice();
+
 struct DeviceSelection {
   DeviceInfo device;
   /// Why this device: "matches cl.device='...'" or "fallback: ..." (for `emf info` and logs).

@@ -47,7 +47,7 @@ int cmdInfo(const std::vector<std::string>& args) {
               EMF_API_VERSION);
   const auto devices = cl::listDevices();
   std::printf("OpenCL devices:\n");
-  if (devices.empty()) std::printf("  (none: install pocl-opencl-icd or a GPU driver)\n");
+  if (devices.empty()) std::printf("  (none: %s)\n", cl::noDeviceAdvice().c_str());
   cl::Context ctx(config.cl);
   for (const auto& d : devices) {
     const bool selected = d.device == ctx.deviceId();

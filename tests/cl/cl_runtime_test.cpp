@@ -1,11 +1,13 @@
 // The OpenCL runtime on the CI device (PoCL CPU): selection, kernel path vs CPU reference,
 // the on-disk program cache, build errors with logs.
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <random>
 
+#include "cl/device.h"
 #include "cl/embedded_kernels.h"
 #include "cl/image_scale.h"
 #include "test_support.h"
@@ -50,6 +52,31 @@ TEST(ClSelection, SubstringAndTypeMatch) {
   const DeviceSelection s = selectDevice(o);
   EXPECT_FALSE(s.fallback) << s.reason;
   EXPECT_NE(s.device.device_name.find(o.device), std::string::npos);
+}
+
+TEST(ClErrors, NoDeviceAdviceNamesAnUncreatablePoclCache) {
+  // PoCL (installed here: CI runs on it) reports no platform when it cannot create its kernel
+  // cache folder; the advice must say so instead of "install an ICD". A folder below a file can
+  // never be created, whoever runs the test.
+  ASSERT_TRUE(std::filesystem::exists("/etc/OpenCL/vendors/pocl.icd"));
+  const std::string dir = test::tempDir("pocl-advice");
+  std::ofstream(dir + "/a_file") << "x";
+  const char* old = std::getenv("POCL_CACHE_DIR");
+  const std::string saved = old ? old : "";
+  ::setenv("POCL_CACHE_DIR", (dir + "/a_file/pocl").c_str(), 1);
+  const std::string blocked = noDeviceAdvice();
+  ::setenv("POCL_CACHE_DIR", (dir + "/cache/pocl").c_str(), 1);
+  const std::string writable = noDeviceAdvice();
+  if (old) {
+    ::setenv("POCL_CACHE_DIR", saved.c_str(), 1);
+  } else {
+    ::unsetenv("POCL_CACHE_DIR");
+  }
+  EXPECT_NE(blocked.find("cannot create its kernel cache folder '" + dir + "/a_file/pocl'"),
+            std::string::npos)
+      << blocked;
+  EXPECT_NE(blocked.find("set POCL_CACHE_DIR"), std::string::npos) << blocked;
+  EXPECT_NE(writable.find("install pocl-opencl-icd"), std::string::npos) << writable;
 }
 
 TEST(ClErrors, NamesAndMessages) {
