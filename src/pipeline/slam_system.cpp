@@ -116,9 +116,19 @@ SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrins
                              static_cast<size_t>(intrinsics.height);
   fg_mask_ = ctx.buffer(CL_MEM_READ_ONLY, image_bytes);
   new_weights_ = ctx.buffer(CL_MEM_READ_ONLY, image_bytes);
+  const double index_mib = static_cast<double>(background_->indexBytes()) / (1 << 20);
   logInfo("background volume: ", spec.dims_blocks.x() * map::kBlockSize, "^3 voxels of ",
-          spec.voxel_size_m * 100, " cm; pool ", pool_->capacitySlots(), " blocks (",
-          config.map.memory_mb, " MiB); up to ", config.objects.max_objects, " objects");
+          spec.voxel_size_m * 100, " cm (block index ", index_mib, " MiB); pool ",
+          pool_->capacitySlots(), " slots (", config.map.memory_mb, " MiB); up to ",
+          config.objects.max_objects, " objects");
+  // The dense block index lives outside the pool's budget; past the pool's own size it is the
+  // larger part of the memory in use (background_resolution 4096: 1.15 GiB for a 256 MiB pool).
+  if (index_mib > config.map.memory_mb) {
+    logWarning("the background's block index takes ", index_mib, " MiB outside map.memory_mb (",
+               config.map.memory_mb, " MiB): lower map.background_resolution (",
+               config.map.background_resolution,
+               "; a coarser map.background_voxel_m keeps the extent) to stay near the budget");
+  }
 }
 
 SlamSystem::~SlamSystem() = default;

@@ -177,6 +177,25 @@ TEST(CliRun, BrokenFrameKeepsTheOutputsOfTheFramesBefore) {
   EXPECT_NE(j["error"].get<std::string>().find("stopped after 3 frames"), std::string::npos);
 }
 
+TEST(CliRun, ABlockIndexLargerThanThePoolIsAWarning) {
+  // 1024^3 voxels: 128^3 blocks, ~19 MiB of dense index outside an 8 MiB pool.
+  const std::string out_dir = test::tempDir("run-index") + "/out";
+  std::string out;
+  ASSERT_EQ(test::runCommand(cli() +
+                                 " run --quiet --source 'synth:room?frames=1&width=80&height=60'"
+                                 " --set map.memory_mb=8 --set map.background_voxel_m=0.04"
+                                 " --set map.background_resolution=1024 --out " +
+                                 out_dir,
+                             &out),
+            0)
+      << out;
+  EXPECT_NE(out.find("MiB outside map.memory_mb (8 MiB): lower map.background_resolution (1024"),
+            std::string::npos)
+      << out;
+  const nlohmann::json j = nlohmann::json::parse(readText(out_dir + "/run.json"));
+  EXPECT_GT(j["memory"]["background_index_bytes"].get<double>(), 8.0 * (1 << 20));
+}
+
 TEST(CliRun, SigtermEndsTheRunAfterTheCurrentFrameAndKeepsItsOutputs) {
   // A long run, terminated once its fourth frame's image exists: the outputs of the frames done
   // so far are written (atomically, no temporary left), run.json says why, exit 128 + 15.
