@@ -49,6 +49,10 @@ int cmdRun(const std::vector<std::string>& args) {
            "configuration string for the plugin (detector.plugin_config)");
   p.flag("quiet", &quiet, "no progress line");
   if (auto code = p.parse(args)) return *code;
+  // From here on the first Ctrl-C / SIGTERM ends the run after the current frame and the outputs
+  // are still written; one during start-up (OpenCL kernel builds, opening a sensor) lets the
+  // start-up finish and writes the outputs of zero frames. A second signal terminates at once.
+  const InterruptGuard interrupt;
   if (!frames_text.empty()) sets.push_back("source.max_frames=" + frames_text);
   Config config = loadConfig(config_file, sets);
   // Set directly, not through --set: plugin configuration strings may hold '=', ':' or quotes.
@@ -90,9 +94,6 @@ int cmdRun(const std::vector<std::string>& args) {
   const auto t0 = std::chrono::steady_clock::now();
   io::Frame frame;
   int64_t n = 0;
-  // From here on the first Ctrl-C / SIGTERM ends the run after the current frame and the outputs
-  // are still written (a second one terminates at once).
-  const InterruptGuard interrupt;
   try {
     while (!interrupt.requested() &&
            (config.source.max_frames == 0 || n < config.source.max_frames) && src->next(frame)) {

@@ -225,5 +225,31 @@ TEST(CliRun, SigtermEndsTheRunAfterTheCurrentFrameAndKeepsItsOutputs) {
   }
 }
 
+TEST(CliRun, SigtermDuringStartUpStillWritesTheOutputs) {
+  // SIGTERM as soon as the start-up log names the source, before the SLAM's kernels and pool
+  // exist: the start-up finishes, no frame (or the few begun) runs, and the outputs are written
+  // with the reason, exit 128 + 15 (before the handler covered start-up, the process died there
+  // and wrote nothing).
+  const std::string dir = test::tempDir("run-sigterm-start");
+  const std::string out_dir = dir + "/out";
+  const std::string run = std::string(kTinyRun);
+  const std::string emf_cmd = "EMF_LOG_LEVEL=info " + cli() + run.substr(0, run.find("frames=3")) +
+                              "frames=5000" + run.substr(run.find("frames=3") + 8) + " --out " +
+                              out_dir;
+  const std::string log = dir + "/stderr.txt";
+  const std::string script = emf_cmd + " 2>" + log + " & pid=$!; i=0; while ! grep -q 'source:' " +
+                             log + " 2>/dev/null && [ $i -lt 12000 ]; do i=$((i+1)); done; " +
+                             "kill -TERM $pid; wait $pid; echo \"rc=$?\"";
+  std::ofstream(dir + "/run.sh") << script << "\n";
+  std::string out;
+  ASSERT_EQ(test::runCommand("sh " + dir + "/run.sh", &out), 0) << out;
+  EXPECT_NE(out.find("rc=143"), std::string::npos) << out << readText(log);
+  const nlohmann::json j = nlohmann::json::parse(readText(out_dir + "/run.json"));
+  EXPECT_NE(j["error"].get<std::string>().find("interrupted by SIGTERM"), std::string::npos);
+  EXPECT_LT(j["frames"].get<size_t>(), 5000u);
+  EXPECT_TRUE(std::filesystem::exists(out_dir + "/camera.txt"));
+  EXPECT_TRUE(std::filesystem::exists(out_dir + "/background.ply"));
+}
+
 }  // namespace
 }  // namespace emf
