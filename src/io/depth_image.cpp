@@ -1,10 +1,13 @@
 #include "io/depth_image.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
 #include <opencv2/imgcodecs.hpp>
+#include <vector>
 
 #include "common/error.h"
 
@@ -36,6 +39,45 @@ cv::Mat depthToUnits(const cv::Mat& depth_m, double units_per_metre) {
     }
   }
   return out;
+}
+
+std::string depthScaleWarning(const cv::Mat& depth_units, double units_per_metre) {
+  CV_Assert(depth_units.type() == CV_16UC1);
+  std::vector<uint16_t> valid;
+  valid.reserve(depth_units.total());
+  for (int y = 0; y < depth_units.rows; ++y) {
+    const uint16_t* row = depth_units.ptr<uint16_t>(y);
+    for (int x = 0; x < depth_units.cols; ++x) {
+      if (row[x] != 0) valid.push_back(row[x]);
+    }
+  }
+  if (valid.empty() || valid.size() * 100 < depth_units.total()) return "";
+  const auto quantile_m = [&valid, units_per_metre](double q) {
+    const auto k = valid.begin() + static_cast<std::ptrdiff_t>(q * double(valid.size() - 1));
+    std::nth_element(valid.begin(), k, valid.end());
+    return *k / units_per_metre;
+  };
+  constexpr double kMillimetres = 1000.0, kTum = 5000.0;
+  char text[320];
+  const double p95 = quantile_m(0.95);
+  if (p95 < 1.0 && units_per_metre != kMillimetres) {
+    std::snprintf(text, sizeof(text),
+                  "95%% of the valid depth is closer than %.2f m at depth_scale %g units per "
+                  "metre; if the images are in millimetres (7-Scenes, OpenNI recordings), add "
+                  "?depth_scale=1000 to the source URI",
+                  p95, units_per_metre);
+    return text;
+  }
+  const double median = quantile_m(0.5);
+  if (median > 10.0 && units_per_metre != kTum) {
+    std::snprintf(text, sizeof(text),
+                  "half of the valid depth is farther than %.1f m at depth_scale %g units per "
+                  "metre; if the images are TUM-scaled (5000 per metre), add ?depth_scale=5000 to "
+                  "the source URI",
+                  median, units_per_metre);
+    return text;
+  }
+  return "";
 }
 
 std::string describeMatType(int type) {

@@ -16,6 +16,15 @@ cv::Mat depthFromUnits(const cv::Mat& depth_units, double units_per_metre);
 /// bit-exactly when d came from depthFromUnits with the same scale.
 cv::Mat depthToUnits(const cv::Mat& depth_m, double units_per_metre);
 
+/// A warning when the valid depth of `depth_units` read at `units_per_metre` looks like the wrong
+/// scale, empty when it looks plausible (or fewer than 1 % of the pixels are valid):
+/// - 95 % of the valid pixels closer than 1 m at a scale other than 1000: the typical picture of
+///   millimetre images (7-Scenes, OpenNI recordings) read at TUM's 5000;
+/// - half of them farther than 10 m at a scale other than 5000: TUM-scaled images read as
+///   millimetres.
+/// The text names the depth found and the URI key to set (`?depth_scale=`).
+std::string depthScaleWarning(const cv::Mat& depth_units, double units_per_metre);
+
 /// Reads a 16-bit single-channel depth PNG. Throws IoError starting with `context` (e.g.
 /// "depth.txt:12") and naming `path` when the file is missing/undecodable or not 16-bit
 /// single-channel.

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "common/log.h"
 #include "io/depth_image.h"
 #include "io/tum_source.h"
 
@@ -124,6 +125,10 @@ bool KlgSource::next(Frame& frame) {
   std::snprintf(text, sizeof(text), "%.6f", f.timestamp);
   f.timestamp_text = text;
   f.depth = depthFromUnits(units, depth_scale_);
+  if (i == 0) {
+    const std::string scale_warning = depthScaleWarning(units, depth_scale_);
+    if (!scale_warning.empty()) logWarning("KLG file '", path_, "', frame 0: ", scale_warning);
+  }
   if (image_size > 0) {
     std::vector<unsigned char> image_bytes(static_cast<size_t>(image_size));
     readExact(image_bytes.data(), image_bytes.size(), i, "colour image");

@@ -209,7 +209,13 @@ TumSource::TumSource(const std::string& dir, const SourceOptions& options)
   if (fs::exists(gt_path)) ground_truth_ = readTrajectory(gt_path);
 
   first_depth_file_ = (root / entries_[0].depth_file).string();
-  depth_size_ = readDepthUnits(first_depth_file_, entries_[0].origin).size();
+  const cv::Mat first_units = readDepthUnits(first_depth_file_, entries_[0].origin);
+  depth_size_ = first_units.size();
+  const std::string scale_warning = depthScaleWarning(first_units, options.depth_scale);
+  if (!scale_warning.empty()) {
+    logWarning("TUM folder '", dir, "', first depth image '", first_depth_file_,
+               "': ", scale_warning);
+  }
   intrinsics_ = resolveIntrinsics(options, (root / "calibration.txt").string(), depth_size_,
                                   "TUM folder '" + dir + "'");
   if (fs::is_directory(root / "masks")) masks_dir_ = (root / "masks").string();

@@ -8,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "common/error.h"
+#include "io/depth_image.h"
 #include "io/trajectory.h"
 #include "io_test_util.h"
 #include "test_support.h"
@@ -112,6 +113,43 @@ TEST(TumSource, ReadsAllOfFr3CabinetKeyframes) {
   k.cx = 320.1;
   k.cy = 247.6;
   checkWholeFolder(test::dataPath("tum-fr3-cabinet-keyframes"), "", 5000.0, 58, k);
+}
+
+// Every depth image of the real TUM-layout folders, read at its own scale and at the other
+// common one: the scale check must stay silent on the right scale and speak on the wrong one.
+int framesWarned(const std::string& dir, double scale) {
+  int warned = 0;
+  for (const auto& e : fs::directory_iterator(dir + "/depth")) {
+    const cv::Mat units = readDepthUnits(e.path().string(), "test");
+    const std::string w = depthScaleWarning(units, scale);
+    if (!w.empty()) {
+      ++warned;
+      EXPECT_NE(w.find("?depth_scale="), std::string::npos) << w;
+    }
+  }
+  return warned;
+}
+
+TEST(DepthScaleWarning, SilentAtTheRightScaleOnRealFramesAndSpeaksAtTheWrongOne) {
+  const std::string kitchen = test::dataPath("redkitchen-0-299");  // millimetres
+  EXPECT_EQ(framesWarned(kitchen, 1000.0), 0);
+  EXPECT_EQ(framesWarned(kitchen, 5000.0), 300);
+  const std::string cabinet = test::dataPath("tum-fr3-cabinet-keyframes");  // TUM, 5000
+  EXPECT_EQ(framesWarned(cabinet, 5000.0), 0);
+  // TUM units read as millimetres put this cabinet at 5-10 m, which a sensor can see: only a
+  // median beyond 10 m is called implausible.
+  const cv::Mat far(480, 640, CV_16UC1, cv::Scalar(12000));
+  EXPECT_NE(depthScaleWarning(far, 1000.0).find("add ?depth_scale=5000"), std::string::npos);
+  EXPECT_EQ(depthScaleWarning(far, 5000.0), "");
+  // The message names the depth found and the key to set.
+  const cv::Mat mm = readDepthUnits(kitchen + "/depth/000000.png", "test");
+  EXPECT_NE(depthScaleWarning(mm, 5000.0).find("add ?depth_scale=1000"), std::string::npos);
+  // Too few valid pixels to judge: silent.
+  cv::Mat sparse(480, 640, CV_16UC1, cv::Scalar(0));
+  sparse(cv::Rect(0, 0, 10, 10)).setTo(700);
+  EXPECT_EQ(depthScaleWarning(sparse, 5000.0), "");
+  sparse(cv::Rect(0, 0, 64, 48)).setTo(700);
+  EXPECT_NE(depthScaleWarning(sparse, 5000.0), "");
 }
 
 TEST(TumSource, QueryOverridesCalibrationAndLimitsFrames) {
