@@ -94,6 +94,7 @@ int cmdRun(const std::vector<std::string>& args) {
   const auto t0 = std::chrono::steady_clock::now();
   io::Frame frame;
   int64_t n = 0;
+  std::string last_written_stamp;
   try {
     while (!interrupt.requested() &&
            (config.source.max_frames == 0 || n < config.source.max_frames) && src->next(frame)) {
@@ -106,6 +107,21 @@ int cmdRun(const std::vector<std::string>& args) {
                    "; not integrated, keeping the last good pose");
       } else if (camera.empty() || frame.timestamp > camera.stamps.back()) {
         camera.append(frame.timestamp, o.T_world_camera);
+        last_written_stamp = frame.timestamp_text;
+      } else {
+        // Tracked and fused, but a TUM file cannot hold a stamp that is not after the last.
+        if (info.frames_not_in_trajectories++ % 100 == 0) {
+          if (info.first_frame_not_in_trajectories < 0) {
+            info.first_frame_not_in_trajectories = o.index;
+          }
+          logWarning("frame ", o.index, ": timestamp ", frame.timestamp_text,
+                     " is not after the last pose written (", last_written_stamp,
+                     "); the source's clock repeated or stepped back. The frame is tracked and "
+                     "fused but its pose is left out of camera.txt and object-<id>.txt (",
+                     info.frames_not_in_trajectories,
+                     " such frame(s) so far; run.json "
+                     "frames_not_in_trajectories)");
+        }
       }
       if (id_renderer) {
         cv::Mat ids;

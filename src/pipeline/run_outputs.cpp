@@ -75,6 +75,10 @@ std::string runSummaryJson(const SlamSystem& slam, const cl::Context& ctx, const
     lost.push_back({{"index", l.index}, {"timestamp", l.timestamp}, {"reason", l.reason}});
   }
   j["lost"] = lost;
+  j["frames_not_in_trajectories"] = info.frames_not_in_trajectories;
+  if (info.frames_not_in_trajectories > 0) {
+    j["first_frame_not_in_trajectories"] = info.first_frame_not_in_trajectories;
+  }
   j["wall_s"] = info.wall_s;
   j["frames_per_s"] = info.wall_s > 0 ? slam.framesProcessed() / info.wall_s : 0.0;
   nlohmann::json stages;

@@ -28,6 +28,12 @@ struct RunInfo {
   std::string config_file;
   double wall_s = 0;
   std::vector<LostFrame> lost;
+  /// Frames tracked whose timestamp was not after the last one written (a sensor clock that
+  /// stepped back or repeated): TUM files need increasing stamps, so their poses (the camera's
+  /// and the objects') are left out of the trajectory files. run.json
+  /// "frames_not_in_trajectories" and "first_frame_not_in_trajectories".
+  int64_t frames_not_in_trajectories = 0;
+  int64_t first_frame_not_in_trajectories = -1;
   /// Per-object summaries (run.json "objects" array) when the run tracks objects.
   std::optional<std::vector<ObjectSummary>> objects;
   /// Detector counters (run.json "detector") when a detector ran.

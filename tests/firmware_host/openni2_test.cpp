@@ -405,5 +405,49 @@ TEST(Openni2Hotplug, UnplugIsAnErrorStateAndReplugResumes) {
   EXPECT_EQ(rs->reconnects(), 1);
 }
 
+TEST(Openni2Virtual, RepeatedSensorTimestampsAreCountedNotSilentlyDropped) {
+  // A sensor clock that repeats stamps (the virtual device serves depth.txt's as they are): emf
+  // run tracks and fuses every frame, but a TUM file cannot hold a repeated stamp, so those poses
+  // are left out of camera.txt, with a warning and run.json's count (they were dropped without a
+  // word before).
+  const std::string dir = test::tempDir("repeated-stamps");
+  const std::string cli = EMF_CLI_PATH;
+  std::string out;
+  ASSERT_EQ(test::runCommand(cli + " synth room --out " + dir +
+                                 "/seq --frames 6 --width 160 --height 120 --det-every 0",
+                             &out),
+            0)
+      << out;
+  fs::remove(dir + "/seq/associations.txt");
+  for (const std::string list : {"depth", "rgb"}) {
+    const TumList l = readList(dir + "/seq/" + list + ".txt");
+    std::ofstream f(dir + "/seq/" + list + ".txt");
+    for (size_t i = 0; i < l.files.size(); ++i) {
+      f << std::fixed << 100.0 + 0.1 * static_cast<double>(i / 2) << " " << l.files[i] << "\n";
+    }
+  }
+  const std::string run_dir = dir + "/run";
+  ASSERT_EQ(test::runCommand(cli + " run --quiet --source 'openni2:emf-virtual://" + dir +
+                                 "/seq;speed=0' --out " + run_dir,
+                             &out),
+            0)
+      << out;
+  EXPECT_NE(out.find("frame 1: timestamp 100.000000 is not after the last pose written"),
+            std::string::npos)
+      << out;
+  std::ifstream camera(run_dir + "/camera.txt");
+  std::vector<double> stamps;
+  for (std::string line; std::getline(camera, line);) {
+    if (!line.empty() && line[0] != '#') stamps.push_back(std::stod(line));
+  }
+  ASSERT_EQ(stamps.size(), 3u) << out;
+  EXPECT_NEAR(stamps[2], 100.2, 1e-6);
+  std::ifstream json_file(run_dir + "/run.json");
+  const std::string json((std::istreambuf_iterator<char>(json_file)), {});
+  EXPECT_NE(json.find("\"frames_not_in_trajectories\": 3"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"first_frame_not_in_trajectories\": 1"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"lost_frames\": 0"), std::string::npos) << json;
+}
+
 }  // namespace
 }  // namespace emf::fw
