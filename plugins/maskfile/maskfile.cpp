@@ -7,6 +7,7 @@
 // "dir=<dataset folder>". Frames without a masks file have no detections.
 #include <emf/emf_detector.h>
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -40,16 +41,52 @@ void setError(char* error, size_t size, const std::string& msg) {
   std::snprintf(error, size, "%s", msg.c_str());
 }
 
+/// %XX sequences decoded, as emf's URI parser does for the path ("my%20data" -> "my data").
+std::string percentDecode(const std::string& text) {
+  std::string out;
+  for (size_t i = 0; i < text.size(); ++i) {
+    if (text[i] == '%' && i + 2 < text.size() &&
+        std::isxdigit(static_cast<unsigned char>(text[i + 1])) &&
+        std::isxdigit(static_cast<unsigned char>(text[i + 2]))) {
+      out += static_cast<char>(std::stoi(text.substr(i + 1, 2), nullptr, 16));
+      i += 2;
+    } else {
+      out += text[i];
+    }
+  }
+  return out;
+}
+
+/// The dataset folder of a tum:<dir> or cofusion:<dir> URI (scheme in any case, path
+/// percent-decoded, query dropped), "" for other sources.
 std::string folderFromUri(const std::string& uri) {
   for (const char* scheme : {"tum:", "cofusion:"}) {
     const size_t n = std::strlen(scheme);
-    if (uri.compare(0, n, scheme) == 0) {
-      std::string rest = uri.substr(n);
-      const size_t q = rest.find('?');
-      return q == std::string::npos ? rest : rest.substr(0, q);
+    if (uri.size() < n) continue;
+    bool same = true;
+    for (size_t i = 0; i < n; ++i) {
+      same = same && std::tolower(static_cast<unsigned char>(uri[i])) == scheme[i];
+    }
+    if (same) {
+      const std::string rest = uri.substr(n);
+      return percentDecode(rest.substr(0, rest.find('?')));
     }
   }
   return "";
+}
+
+/// The fields of a masks/<timestamp>.txt line as emf's dataset reader splits them: blanks and
+/// tabs separate, a CR at the end is dropped; empty for a blank line or one whose first non-blank
+/// character is '#'.
+std::vector<std::string> tableFields(std::string line) {
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  std::vector<std::string> fields;
+  std::istringstream in(line);
+  for (std::string f; in >> f;) {
+    if (fields.empty() && f[0] == '#') break;
+    fields.push_back(f);
+  }
+  return fields;
 }
 
 emf_status create(const emf_detector_create_info* info, emf_detector** out, char* error,
@@ -113,19 +150,31 @@ emf_status detect(emf_detector* det, const emf_detector_frame* frame, emf_detect
     auto r = std::make_unique<Result>();
     std::string line;
     int line_no = 0;
+    std::map<int, int> id_lines;  // detection id -> line, to refuse an id listed twice
     while (std::getline(txt, line)) {
       ++line_no;
-      if (line.empty() || line[0] == '#') continue;
-      std::istringstream ls(line);
+      const std::vector<std::string> fields = tableFields(line);
+      if (fields.empty()) continue;
+      const std::string where = "maskfile: " + base + ".txt:" + std::to_string(line_no) + ": ";
       int id = 0;
-      std::string name;
       float score = 0;
-      if (!(ls >> id >> name >> score) || id <= 0 || id > 65535 || !std::isfinite(score)) {
+      char end = 0;
+      if (fields.size() != 3 || std::sscanf(fields[0].c_str(), "%d%c", &id, &end) != 1 ||
+          std::sscanf(fields[2].c_str(), "%f%c", &score, &end) != 1 || id <= 0 || id > 65535 ||
+          !std::isfinite(score) || score < 0.0f || score > 1.0f) {
         setError(error, error_size,
-                 "maskfile: " + base + ".txt:" + std::to_string(line_no) +
-                     ": expected `det_id class_name score`, got '" + line + "'");
+                 where +
+                     "expected `det_id class_name score` (id 1..65535, score in [0, 1]), got '" +
+                     line + "'");
         return EMF_ERROR_IO;
       }
+      if (!id_lines.emplace(id, line_no).second) {
+        setError(error, error_size,
+                 where + "detection id " + fields[0] + " is listed twice (also on line " +
+                     std::to_string(id_lines[id]) + ")");
+        return EMF_ERROR_IO;
+      }
+      std::string name = fields[1];
       for (char& c : name) c = (c == '_') ? ' ' : c;
       std::vector<uint8_t> mask(static_cast<size_t>(ids.total()), 0);
       int x0 = ids.cols, y0 = ids.rows, x1 = -1, y1 = -1;

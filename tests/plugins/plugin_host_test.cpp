@@ -204,5 +204,36 @@ TEST(MaskfilePlugin, ExplicitDirAndErrors) {
   EXPECT_NE(e.find("no dataset folder"), std::string::npos) << e;
 }
 
+TEST(MaskfilePlugin, ReadsWhatTheDatasetReaderReadsAndRefusesWhatItRefuses) {
+  // The folder comes percent-encoded in an upper-case scheme (emf's URI parser decodes both), and
+  // the list has an indented comment, CRLF ends and a blank CR line, all of which the dataset
+  // reader accepts: the plugin used to find no folder or reject every file.
+  const std::string dir = test::tempDir("mask file");
+  writeMasks(dir, "5.000000");
+  std::ofstream(dir + "/masks/5.000000.txt", std::ios::binary)
+      << "  # det_id class score\r\n1 teddy_bear 0.875\r\n\r\n\t2 car 0.5\r\n";
+  std::string encoded = dir;
+  encoded.replace(encoded.find("mask file"), 9, "mask%20file");
+  auto p = DetectorPlugin::load("maskfile", kBuildPath, "", "TUM:" + encoded + "?depth_scale=1000",
+                                smallCamera());
+  const DetectorOutput out = p->detect(frame(0, "5.000000"));
+  ASSERT_TRUE(out.error.empty()) << out.error;
+  ASSERT_EQ(out.detections.size(), 2u);
+  EXPECT_EQ(out.detections[0].class_name, "teddy bear");
+  EXPECT_FLOAT_EQ(out.detections[0].score, 0.875f);
+  EXPECT_EQ(out.detections[1].box, cv::Rect(40, 30, 20, 5));
+  // What the dataset reader refuses, the plugin refuses, naming the line.
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"1 cup 0.5\n1 car 0.5\n", ".txt:2: detection id 1 is listed twice (also on line 1)"},
+      {"1 cup 1.5\n", ".txt:1: expected `det_id class_name score`"},
+      {"1 cup 0.5 extra\n", ".txt:1: expected"},
+      {"1x cup 0.5\n", ".txt:1: expected"}};
+  for (const auto& [text, expected] : bad) {
+    std::ofstream(dir + "/masks/5.000000.txt") << text;
+    const DetectorOutput r = p->detect(frame(1, "5.000000"));
+    EXPECT_NE(r.error.find(expected), std::string::npos) << text << " -> " << r.error;
+  }
+}
+
 }  // namespace
 }  // namespace emf::pipeline
