@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <map>
+#include <set>
 
 #include "common/error.h"
 #include "common/log.h"
@@ -213,12 +214,41 @@ TumSource::TumSource(const std::string& dir, const SourceOptions& options)
   depth_size_ = first_units.size();
   const std::string scale_warning = depthScaleWarning(first_units, options.depth_scale);
   if (!scale_warning.empty()) {
-    logWarning("TUM folder '", dir, "', first depth image '", first_depth_file_,
-               "': ", scale_warning);
+    warn("TUM folder '" + dir + "', first depth image '" + first_depth_file_ +
+         "': " + scale_warning);
   }
   intrinsics_ = resolveIntrinsics(options, (root / "calibration.txt").string(), depth_size_,
                                   "TUM folder '" + dir + "'");
-  if (fs::is_directory(root / "masks")) masks_dir_ = (root / "masks").string();
+  if (fs::is_directory(root / "masks")) {
+    masks_dir_ = (root / "masks").string();
+    checkMasksMatchFrames();
+  }
+}
+
+void TumSource::warn(const std::string& text) {
+  logWarning(text);
+  open_warnings_.push_back(text);
+}
+
+void TumSource::checkMasksMatchFrames() {
+  // Detections are looked up by the frame's depth timestamp text: a folder written with other
+  // digits (7 decimals instead of 6) would give no detections at all without a word.
+  std::set<std::string> lists;
+  std::string example;
+  for (const auto& e : fs::directory_iterator(masks_dir_)) {
+    if (e.path().extension() != ".txt") continue;
+    lists.insert(e.path().stem().string());
+    if (example.empty() || e.path().stem().string() < example) example = e.path().stem().string();
+  }
+  if (lists.empty()) return;
+  for (const TumEntry& e : entries_) {
+    if (lists.count(e.depth_stamp_text)) return;
+  }
+  warn("TUM folder '" + dir_ + "': masks/ has " + std::to_string(lists.size()) +
+       " detection list(s) but none is named after a frame's depth timestamp (first frame: '" +
+       entries_[0].depth_stamp_text + ".txt', masks/ has e.g. '" + example +
+       ".txt'): they are matched by the timestamp text exactly, so no frame gets detections; "
+       "rename them after depth.txt's timestamps");
 }
 
 Frame TumSource::readFrame(size_t index) const {

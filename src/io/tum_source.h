@@ -47,8 +47,14 @@ class TumSource : public FrameSource {
   const Trajectory& groundTruth() const { return ground_truth_; }
   /// Reads frame `index` (0-based) without moving the cursor of next().
   Frame readFrame(size_t index) const;
+  /// What opening the folder warned about (also logged): a depth scale that looks wrong for the
+  /// first depth image (see depthScaleWarning), detection lists in masks/ that match no frame.
+  const std::vector<std::string>& openWarnings() const { return open_warnings_; }
 
  private:
+  void warn(const std::string& text);
+  void checkMasksMatchFrames();
+
   std::string dir_;
   SourceOptions options_;
   std::vector<TumEntry> entries_;
@@ -58,6 +64,7 @@ class TumSource : public FrameSource {
   cv::Size depth_size_;
   std::string first_depth_file_;
   size_t cursor_ = 0;
+  std::vector<std::string> open_warnings_;
   mutable cv::Size color_size_;  // first colour image's size (0x0 until read)
   mutable std::string first_color_file_;
 };

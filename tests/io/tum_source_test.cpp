@@ -279,6 +279,39 @@ TEST(TumSource, AttachesDetectionsAndInterpolatedGroundTruth) {
   EXPECT_NEAR(f1.T_world_camera_gt->translation().x(), 2 * (1.033333 - 1.015) / 0.025, 1e-9);
 }
 
+bool anyContains(const std::vector<std::string>& texts, const std::string& part) {
+  for (const auto& t : texts) {
+    if (t.find(part) != std::string::npos) return true;
+  }
+  return false;
+}
+
+TEST(TumSource, WarnsWhenMasksMatchNoFrameOrTheDepthScaleLooksWrong) {
+  // Lists written with 7 decimals while depth.txt has 6: no frame would get a detection.
+  const std::string kNoMatch = "none is named after a frame's depth timestamp";
+  MiniFolder m({"1.000000", "1.033333"}, {"1.000000", "1.033333"});
+  fs::create_directories(m.dir + "/masks");
+  cv::Mat ids(kSmall, CV_16UC1, cv::Scalar(1));
+  ASSERT_TRUE(cv::imwrite(m.dir + "/masks/1.0333330.png", ids));
+  writeText(m.dir + "/masks/1.0333330.txt", "1 cup 0.8\n");
+  {
+    TumSource s(m.dir, SourceOptions{});
+    EXPECT_TRUE(anyContains(s.openWarnings(), kNoMatch));
+    EXPECT_TRUE(anyContains(s.openWarnings(), "first frame: '1.000000.txt'"));
+  }
+  // One list that matches a frame: no warning.
+  ASSERT_TRUE(cv::imwrite(m.dir + "/masks/1.033333.png", ids));
+  writeText(m.dir + "/masks/1.033333.txt", "1 cup 0.8\n");
+  EXPECT_FALSE(anyContains(TumSource(m.dir, SourceOptions{}).openWarnings(), kNoMatch));
+  // The 7-Scenes millimetres read at the default 5000 units per metre, and at their own scale.
+  const std::string kitchen = test::dataPath("redkitchen-0-299");
+  SourceOptions options;
+  options.max_frames = 1;
+  EXPECT_TRUE(anyContains(TumSource(kitchen, options).openWarnings(), "?depth_scale=1000"));
+  options.depth_scale = 1000;
+  EXPECT_TRUE(TumSource(kitchen, options).openWarnings().empty());
+}
+
 TEST(TumSource, BrokenFoldersGiveErrorsNamingFileAndLine) {
   {
     MiniFolder m({"1.0", "2.0"}, {"1.0", "2.0"});
