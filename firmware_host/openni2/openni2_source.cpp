@@ -13,6 +13,7 @@
 
 #include "common/error.h"
 #include "common/log.h"
+#include "firmware_host/openni2/virtual_device/virtual_properties.h"
 #include "firmware_host/sensor_error.h"
 #include "firmware_host/sensor_uri.h"
 
@@ -328,6 +329,22 @@ Openni2Source::Openni2Source(const std::string& uri, const io::SourceOptions& op
   }
   intrinsics_.cx = intrinsics_.width / 2.0;
   intrinsics_.cy = intrinsics_.height / 2.0;
+  // emf's virtual device also gives its full calibration (principal point included).
+  virtual_device::PinholeProperty pinhole{};
+  if (geometry.isPropertySupported(virtual_device::kPinholeProperty) &&
+      geometry.getProperty(virtual_device::kPinholeProperty, &pinhole) == openni::STATUS_OK &&
+      pinhole.fx > 0 && pinhole.fy > 0) {
+    const double sx = registered_ ? static_cast<double>(intrinsics_.width) /
+                                        std::max(1, m.color.getVideoMode().getResolutionX())
+                                  : 1.0;
+    const double sy = registered_ ? static_cast<double>(intrinsics_.height) /
+                                        std::max(1, m.color.getVideoMode().getResolutionY())
+                                  : 1.0;
+    intrinsics_.fx = pinhole.fx * sx;
+    intrinsics_.fy = pinhole.fy * sy;
+    intrinsics_.cx = (pinhole.cx + 0.5) * sx - 0.5;
+    intrinsics_.cy = (pinhole.cy + 0.5) * sy - 0.5;
+  }
   if (fx > 0) intrinsics_.fx = fx;
   if (fy > 0) intrinsics_.fy = fy;
   if (cx > 0) intrinsics_.cx = cx;

@@ -317,6 +317,39 @@ std::string errorOf(Fn&& fn) {
   return "(no error)";
 }
 
+TEST(Openni2Virtual, FullCalibrationFarDepthAndBadFolders) {
+  // The principal point of calibration.txt reaches emf exactly (OpenNI2's field of view alone
+  // would put it at the image centre, 32 / 24, and the focal length to float precision).
+  const std::string dir = makeTinyFolder(2);
+  cv::Mat far = cv::imread(dir + "/depth/000000.png", cv::IMREAD_UNCHANGED);
+  far(cv::Rect(0, 0, 16, 8)).setTo(40000);  // 8 m: beyond what 100 um units hold (6.5535 m)
+  ASSERT_TRUE(cv::imwrite(dir + "/depth/000000.png", far));
+  io::SourceOptions options;
+  {
+    Openni2Source src("openni2:emf-virtual://" + dir + ";speed=0", options);
+    EXPECT_EQ(src.intrinsics().fx, 50.0);
+    EXPECT_EQ(src.intrinsics().fy, 52.0);
+    EXPECT_EQ(src.intrinsics().cx, 31.5);
+    EXPECT_EQ(src.intrinsics().cy, 23.5);
+    io::Frame f;
+    ASSERT_TRUE(src.next(f));
+    // Invalid, not a phantom wall at 6.5535 m; the rest of the image is served as before.
+    EXPECT_EQ(cv::countNonZero(f.depth(cv::Rect(0, 0, 16, 8)) == f.depth(cv::Rect(0, 0, 16, 8))),
+              0);
+    EXPECT_NEAR(f.depth.at<float>(20, 20), (5000 + 20 * 3 + 20) / 5000.0, 1e-4);
+  }
+  // A folder without calibration.txt: refused (tum: refuses it too), not served at 525 px.
+  std::filesystem::remove(dir + "/calibration.txt");
+  std::string e =
+      errorOf([&] { Openni2Source("openni2:emf-virtual://" + dir + ";speed=0", options); });
+  EXPECT_NE(e.find(dir + "/calibration.txt: missing"), std::string::npos) << e;
+  // Negative timestamps would wrap around the device's unsigned microseconds.
+  const std::string neg = makeTinyFolder(2);
+  std::ofstream(neg + "/depth.txt") << "-1.0 depth/000000.png\n-0.9 depth/000001.png\n";
+  e = errorOf([&] { Openni2Source("openni2:emf-virtual://" + neg + ";speed=0", options); });
+  EXPECT_NE(e.find(neg + "/depth.txt:1: timestamp -1.000000 is negative"), std::string::npos) << e;
+}
+
 TEST(Openni2Errors, ClearMessagesForMissingDevicesAndBadParameters) {
   io::SourceOptions options;
   std::string e = errorOf([&] { Openni2Source("openni2:emf-virtual:///no/such/folder", options); });

@@ -52,6 +52,12 @@ bool readList(const std::string& path, std::vector<double>* stamps, std::vector<
                line + "'";
       return false;
     }
+    if (t < 0) {
+      *error = path + ":" + std::to_string(line_no) + ": timestamp " + std::to_string(t) +
+               " is negative; a device's timestamps are unsigned microseconds (shift the list's "
+               "timestamps to start at 0 or later)";
+      return false;
+    }
     if (!stamps->empty() && t < stamps->back()) {
       *error = path + ":" + std::to_string(line_no) + ": timestamp " + std::to_string(t) +
                " is earlier than the previous line's; list files must be in time order";
@@ -237,7 +243,14 @@ bool TumFolder::load(const std::string& dir, double depth_scale_override, TumFol
 
   const std::string calib_path = joinPath(dir, "calibration.txt");
   std::ifstream calib(calib_path);
-  if (calib) {
+  if (!calib) {
+    // Not guessed (a TUM default would be wrong for any other camera or resolution).
+    *error = calib_path +
+             ": missing; the device reports its intrinsics from it: write `fx fy cx "
+             "cy width height` (pixels, depth camera)";
+    return false;
+  }
+  {
     double fx = 0, fy = 0, cx = 0, cy = 0;
     if (!(calib >> fx >> fy >> cx >> cy) || fx <= 0 || fy <= 0) {
       *error = calib_path +

@@ -20,9 +20,9 @@ struct TumFolder {
   std::vector<double> rgb_timestamps_s;
   std::vector<std::string> rgb_files;  // absolute paths
   std::vector<int> rgb_for_depth;      // index into rgb_files per depth frame, -1 = none
-  /// Pinhole intrinsics of the depth camera, pixels (calibration.txt `fx fy cx cy w h`, else the
-  /// TUM default Kinect 525 / 525 / 319.5 / 239.5).
-  double fx = 525.0, fy = 525.0, cx = 319.5, cy = 239.5;
+  /// Pinhole intrinsics of the depth camera, pixels (calibration.txt `fx fy cx cy [w h]`, scaled
+  /// to the depth images' size; a folder without it is refused).
+  double fx = 0, fy = 0, cx = 0, cy = 0;
   int depth_width = 0, depth_height = 0;
   int color_width = 0, color_height = 0;
   /// uint16 depth units per metre (the `depth scale N` note in depth.txt's header, else TUM's

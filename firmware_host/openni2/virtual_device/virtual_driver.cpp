@@ -42,6 +42,7 @@
 #include <vector>
 
 #include "firmware_host/openni2/virtual_device/tum_folder.h"
+#include "firmware_host/openni2/virtual_device/virtual_properties.h"
 
 namespace emf::fw::virtual_device {
 namespace {
@@ -133,13 +134,15 @@ class VirtualDevice;
 class VirtualStream : public oni::driver::StreamBase {
  public:
   VirtualStream(VirtualDevice& device, OniSensorType type, const OniVideoMode& mode, int frames,
-                float hfov_rad, float vfov_rad)
+                const PinholeProperty& pinhole)
       : device_(device),
         type_(type),
         mode_(mode),
         frames_(frames),
-        hfov_rad_(hfov_rad),
-        vfov_rad_(vfov_rad) {}
+        pinhole_(pinhole),
+        // The field of view that reproduces the calibrated focal lengths: fx = w / (2 tan(h/2)).
+        hfov_rad_(static_cast<float>(2.0 * std::atan(mode.resolutionX / (2.0 * pinhole.fx)))),
+        vfov_rad_(static_cast<float>(2.0 * std::atan(mode.resolutionY / (2.0 * pinhole.fy)))) {}
 
   OniStatus start() override;
   void stop() override;
@@ -166,6 +169,8 @@ class VirtualStream : public oni::driver::StreamBase {
         return type_ == ONI_SENSOR_DEPTH;
       case ONI_STREAM_PROPERTY_NUMBER_OF_FRAMES:
         return frames_ > 0;
+      case kPinholeProperty:
+        return TRUE;
       default:
         return FALSE;
     }
@@ -199,6 +204,8 @@ class VirtualStream : public oni::driver::StreamBase {
       case ONI_STREAM_PROPERTY_NUMBER_OF_FRAMES:
         if (frames_ <= 0) return ONI_STATUS_NOT_SUPPORTED;
         return put(frames_, data, size);
+      case kPinholeProperty:
+        return put(pinhole_, data, size);
       default:
         return ONI_STATUS_NOT_SUPPORTED;
     }
@@ -254,6 +261,7 @@ class VirtualStream : public oni::driver::StreamBase {
   const OniSensorType type_;
   const OniVideoMode mode_;
   const int frames_;  // > 0 when the recording is finite (no loop)
+  const PinholeProperty pinhole_;
   const float hfov_rad_, vfov_rad_;
   std::atomic<bool> started_{false};
 };
@@ -287,19 +295,16 @@ class VirtualDevice : public oni::driver::DeviceBase {
     const TumFolder& f = entry_.folder;
     const int frames = entry_.params.loop ? 0 : static_cast<int>(f.depth_files.size());
     if (type == ONI_SENSOR_DEPTH) {
-      // The field of view that reproduces the calibrated focal lengths: fx = w / (2 tan(h/2)).
-      const float hfov = static_cast<float>(2.0 * std::atan(f.depth_width / (2.0 * f.fx)));
-      const float vfov = static_cast<float>(2.0 * std::atan(f.depth_height / (2.0 * f.fy)));
-      return new VirtualStream(*this, type, depth_mode_, frames, hfov, vfov);
+      return new VirtualStream(*this, type, depth_mode_, frames, {f.fx, f.fy, f.cx, f.cy});
     }
     if (type == ONI_SENSOR_COLOR && num_sensors_ == 2) {
-      // Colour is not calibrated in a TUM folder; report the depth camera's angles scaled to the
-      // colour resolution (same optics assumed).
-      const double fxc = f.fx * f.color_width / std::max(1, f.depth_width);
-      const double fyc = f.fy * f.color_height / std::max(1, f.depth_height);
-      const float hfov = static_cast<float>(2.0 * std::atan(f.color_width / (2.0 * fxc)));
-      const float vfov = static_cast<float>(2.0 * std::atan(f.color_height / (2.0 * fyc)));
-      return new VirtualStream(*this, type, color_mode_, frames, hfov, vfov);
+      // Colour is not calibrated in a TUM folder; report the depth camera's calibration scaled to
+      // the colour resolution (same optics assumed).
+      const double sx = static_cast<double>(f.color_width) / std::max(1, f.depth_width);
+      const double sy = static_cast<double>(f.color_height) / std::max(1, f.depth_height);
+      return new VirtualStream(
+          *this, type, color_mode_, frames,
+          {f.fx * sx, f.fy * sy, (f.cx + 0.5) * sx - 0.5, (f.cy + 0.5) * sy - 0.5});
     }
     services_.errorLoggerAppend("emf-virtual: the device has no sensor of type %d",
                                 static_cast<int>(type));
@@ -480,7 +485,10 @@ class VirtualDevice : public oni::driver::DeviceBase {
           // Units of 100 um: value * 10000 / scale (exact for TUM's 5000 and for 10000).
           const double k100 = 10000.0 / f.depth_scale;
           for (auto& v : depth_) {
-            v = static_cast<uint16_t>(std::min(65535.0, std::round(v * k100)));
+            // Beyond 6.5535 m the format has no value: invalid (0), as a sensor reports it, not
+            // a phantom wall at the largest value.
+            const double units = std::round(v * k100);
+            v = units > 65535.0 ? 0 : static_cast<uint16_t>(units);
           }
         }
         const uint64_t ts =
