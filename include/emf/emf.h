@@ -251,7 +251,8 @@ EMF_API emf_status emf_runtime_poll(emf_runtime* runtime, int32_t timeout_ms,
                                     emf_frame_result* result, emf_object_info* objects,
                                     int32_t capacity, int32_t* count);
 
-/** Stops and joins both threads (idempotent; bounded by the source's frame timeout). Frames
+/** Stops and joins both threads (idempotent, also from two threads at once; bounded by the
+ *  source's frame timeout). Frames
  *  still in the ring are discarded; results already queued stay pollable. Not from the
  *  callback. */
 EMF_API emf_status emf_runtime_stop(emf_runtime* runtime);
@@ -266,7 +267,9 @@ EMF_API emf_status emf_runtime_get_stats(const emf_runtime* runtime, emf_stats* 
  *  EMF_ERROR_STATE. NULL for a NULL runtime. */
 EMF_API emf_system* emf_runtime_system(emf_runtime* runtime);
 
-/** Stops and destroys. NULL is a no-op. Not from the callback. */
+/** Stops and destroys. NULL is a no-op. Not from the callback. A poll blocked in another thread
+ *  returns EMF_ERROR_STATE, and destroy waits until the polls and get_stats calls in flight have
+ *  returned before it frees the runtime; no call on it may start once destroy has begun. */
 EMF_API void emf_runtime_destroy(emf_runtime* runtime);
 
 #ifdef __cplusplus

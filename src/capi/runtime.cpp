@@ -1,7 +1,9 @@
 // The runtime C API: emf_runtime wraps a runtime::Runtime around an emf_system whose
 // SlamSystem is fed by the runtime's SLAM thread.
+#include <condition_variable>
 #include <cstring>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include "capi/firewall.h"
@@ -61,7 +63,32 @@ struct emf_runtime {
   emf_result_callback callback = nullptr;
   void* user_data = nullptr;
   std::unique_ptr<emf::runtime::Runtime> runtime;
+  // Calls other threads may make while the controlling thread destroys (poll, get_stats):
+  // emf_runtime_destroy stops the runtime, which ends a blocked poll, then waits for 0.
+  mutable std::mutex calls_mutex;
+  mutable std::condition_variable calls_cv;
+  mutable int calls = 0;
 };
+
+namespace {
+/// Counts a thread-safe call on `rt` for its whole duration (see emf_runtime::calls).
+class CallScope {
+ public:
+  explicit CallScope(const emf_runtime& rt) : rt_(rt) {
+    const std::lock_guard<std::mutex> lock(rt_.calls_mutex);
+    ++rt_.calls;
+  }
+  ~CallScope() {
+    const std::lock_guard<std::mutex> lock(rt_.calls_mutex);
+    if (--rt_.calls == 0) rt_.calls_cv.notify_all();
+  }
+  CallScope(const CallScope&) = delete;
+  CallScope& operator=(const CallScope&) = delete;
+
+ private:
+  const emf_runtime& rt_;
+};
+}  // namespace
 
 using emf::capi::fail;
 using emf::capi::guard;
@@ -163,6 +190,7 @@ EMF_API emf_status emf_runtime_poll(emf_runtime* runtime, int32_t timeout_ms,
                                  "emf_object_info", fn);
       if (s != EMF_OK) return s;
     }
+    const CallScope scope(*runtime);
     emf::runtime::Runtime& rt = *runtime->runtime;
     emf::runtime::RuntimeResult r;
     switch (rt.poll(timeout_ms * 1e-3, &r)) {
@@ -174,8 +202,10 @@ EMF_API emf_status emf_runtime_poll(emf_runtime* runtime, int32_t timeout_ms,
       case emf::runtime::PollStatus::kEndOfStream:
         return fail(EMF_ERROR_END_OF_STREAM,
                     std::string(fn) + ": end of stream: " + rt.describeSource() +
-                        " is exhausted and all " + std::to_string(rt.counters().processed) +
-                        " results were delivered");
+                        " is exhausted and every result was delivered (" +
+                        std::to_string(rt.counters().processed) + " frames processed, " +
+                        std::to_string(rt.counters().results_dropped) +
+                        " results dropped from the full queue: see emf_stats.results_dropped)");
       case emf::runtime::PollStatus::kSensorError:
         return fail(EMF_ERROR_DEVICE, std::string(fn) + ": " + rt.sensorError() +
                                           " (the runtime keeps retrying and resumes when the "
@@ -207,6 +237,7 @@ EMF_API emf_status emf_runtime_get_stats(const emf_runtime* runtime, emf_stats* 
     const emf_status s = emf::capi::checkStruct(stats, stats ? stats->struct_size : 0,
                                                 sizeof(emf_stats), "emf_stats", fn);
     if (s != EMF_OK) return s;
+    const CallScope scope(*runtime);
     const emf::runtime::RuntimeCounters c = runtime->runtime->counters();
     emf_stats out;
     std::memset(&out, 0, sizeof(out));
@@ -233,7 +264,14 @@ EMF_API emf_system* emf_runtime_system(emf_runtime* runtime) {
 EMF_API void emf_runtime_destroy(emf_runtime* runtime) {
   if (!runtime) return;
   try {
-    delete runtime;  // ~Runtime stops and joins
+    // Stopping ends every poll blocked on this runtime (EMF_ERROR_STATE); then wait until the
+    // calls of other threads have left before the memory goes.
+    runtime->runtime->stop();
+    {
+      std::unique_lock<std::mutex> lock(runtime->calls_mutex);
+      runtime->calls_cv.wait(lock, [runtime] { return runtime->calls == 0; });
+    }
+    delete runtime;  // ~Runtime joins (done) and frees
   } catch (...) {
     // Nothing may cross the boundary.
   }

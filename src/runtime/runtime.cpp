@@ -105,9 +105,13 @@ Runtime::~Runtime() {
   } catch (...) {
     // stop() only joins; nothing to report from a destructor.
   }
+  // stop() set kStopped and woke the pollers; the members must outlive their way out of poll().
+  std::unique_lock<std::mutex> lock(mutex_);
+  cv_.wait(lock, [this] { return pollers_ == 0; });
 }
 
 void Runtime::start() {
+  const std::lock_guard<std::mutex> control(control_mutex_);
   std::lock_guard<std::mutex> lock(mutex_);
   if (stop_called_) {
     throw StateError(
@@ -122,6 +126,7 @@ void Runtime::start() {
 }
 
 void Runtime::stop() {
+  const std::lock_guard<std::mutex> control(control_mutex_);
   stop_called_ = true;
   stop_requested_.store(true, std::memory_order_release);
   ring_->stop();
@@ -339,6 +344,14 @@ PollStatus Runtime::poll(double timeout_s, RuntimeResult* result) {
   if (state_ == RuntimeState::kCreated) {
     throw StateError("runtime: poll() before start(): start the runtime first");
   }
+  // Counted while inside (under mutex_ on both ends), so the destructor can wait for us.
+  struct Inside {
+    Runtime& rt;
+    explicit Inside(Runtime& r) : rt(r) { ++rt.pollers_; }
+    ~Inside() {
+      if (--rt.pollers_ == 0) rt.cv_.notify_all();
+    }
+  } inside(*this);
   const bool down_at_entry = sensor_down_;
   while (true) {
     if (!queue_.empty()) {

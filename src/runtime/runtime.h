@@ -144,7 +144,8 @@ class Runtime {
   /// return quickly. Throws ConfigError for a bad ring policy, IoError from the source.
   Runtime(std::unique_ptr<io::FrameSource> source, FrameProcessor& processor,
           const pipeline::RuntimeOptions& options, Callback callback = {});
-  /// Stops and joins.
+  /// Stops, joins, wakes every thread blocked in poll() (they return kStopped) and waits until
+  /// they have left it.
   ~Runtime();
   Runtime(const Runtime&) = delete;
   Runtime& operator=(const Runtime&) = delete;
@@ -152,7 +153,8 @@ class Runtime {
   /// Starts the capture and SLAM threads. No-op while running or after the end of the stream;
   /// throws StateError after stop().
   void start();
-  /// Stops both threads and joins them. Idempotent; frames still in the ring are discarded.
+  /// Stops both threads and joins them. Idempotent, also when two threads call it at once;
+  /// frames still in the ring are discarded.
   void stop();
   /// Waits up to timeout_s for the next result (see PollStatus). Any thread. Throws StateError
   /// before start() (nothing would ever arrive).
@@ -194,11 +196,12 @@ class Runtime {
   std::mutex detections_mutex_;
   std::deque<std::pair<int64_t, std::vector<io::Detection>>> detections_;
 
+  std::mutex control_mutex_;  // serialises start() and stop() (and the joins in them)
   std::thread capture_thread_, slam_thread_;
   std::atomic<bool> stop_requested_{false};
   std::atomic<bool> capture_done_{false};  // the capture thread published its last frame
-  bool started_ = false;                   // controlling thread only
-  bool stop_called_ = false;               // controlling thread only: start() is refused
+  bool started_ = false;                   // under control_mutex_
+  bool stop_called_ = false;               // under control_mutex_: start() is refused
 
   mutable std::mutex mutex_;  // guards everything below
   std::condition_variable cv_;
@@ -208,6 +211,7 @@ class Runtime {
   std::string sensor_error_;
   bool sensor_down_ = false;
   std::exception_ptr failure_;
+  int pollers_ = 0;  // threads inside poll(); the destructor waits for 0
 };
 
 /// Current host steady-clock time in nanoseconds (the clock of FrameSlot::commit_time_ns).

@@ -1,11 +1,15 @@
 /* A live sensor through the runtime C API: the virtual OpenNI2 device (real time, looping) serving
  * a TUM folder, its USB cable simulated by a control file. Unplugged, emf_runtime_poll reports
- * EMF_ERROR_DEVICE (not a hang) and the runtime keeps running; re-plugged, results resume.
+ * EMF_ERROR_DEVICE (not a hang) and the runtime keeps running; re-plugged, results resume;
+ * destroyed while another thread is blocked in emf_runtime_poll, that poll ends cleanly.
  * Usage: capi_sensor_test <TUM folder> <control file>.
  * Prints "capi_sensor_test: N checks passed" or FAILED lines. */
+#define _POSIX_C_SOURCE 200809L
 #include <emf/emf.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <string.h>
+#include <time.h>
 
 /* Polls before giving up on an expected event (each waits up to POLL_MS; never reached when the
  * code is right; nothing is timed). */
@@ -53,6 +57,20 @@ static int pollUntil(emf_runtime* rt, emf_status wanted, int64_t* last) {
   return 0;
 }
 
+struct Poller {
+  emf_runtime* rt;
+  emf_status status;
+};
+
+static void* pollLong(void* arg) {
+  struct Poller* p = (struct Poller*)arg;
+  emf_frame_result result;
+  memset(&result, 0, sizeof(result));
+  result.struct_size = sizeof(result);
+  p->status = emf_runtime_poll(p->rt, 60000, &result, NULL, 0, NULL);
+  return NULL;
+}
+
 int main(int argc, char** argv) {
   char uri[8300];
   emf_runtime_options opts;
@@ -91,8 +109,24 @@ int main(int argc, char** argv) {
   printf("results up to source frame %lld before the unplug, %lld after the replug\n",
          (long long)before, (long long)after);
 
-  CHECK(emf_runtime_stop(rt) == EMF_OK);
-  emf_runtime_destroy(rt);
+  /* Shutdown as an integrator writes it: a poll thread blocked with a long timeout (the sensor
+   * unplugged again, so nothing arrives), the main thread destroys. The blocked poll returns
+   * EMF_ERROR_STATE and destroy waits for it to leave before freeing (it used to free the
+   * runtime under the woken poller: ThreadSanitizer / AddressSanitizer reports). */
+  writeControl(argv[2], "unplugged");
+  CHECK(pollUntil(rt, EMF_ERROR_DEVICE, &before));
+  {
+    struct Poller p;
+    pthread_t thread;
+    const struct timespec wait = {0, 300 * 1000 * 1000};
+    p.rt = rt;
+    p.status = EMF_OK;
+    CHECK(pthread_create(&thread, NULL, pollLong, &p) == 0);
+    nanosleep(&wait, NULL); /* the poller is inside its 60 s wait by now */
+    emf_runtime_destroy(rt);
+    CHECK(pthread_join(thread, NULL) == 0);
+    CHECK(p.status == EMF_ERROR_STATE);
+  }
   if (g_failed == 0) printf("capi_sensor_test: %d checks passed\n", g_checks);
   return g_failed == 0 ? 0 : 1;
 }

@@ -324,6 +324,58 @@ TEST(Runtime, StopIsIdempotentJoinsAndCannotRestart) {
   EXPECT_EQ(rt.counters().produced, c.produced);
 }
 
+TEST(Runtime, DestroyWhilePollersWaitEndsTheirPollsFirst) {
+  // Two threads blocked in poll(60 s) (the source holds frame 1 back), the controlling thread
+  // destroys the runtime: both polls return kStopped, and the members they use stay alive until
+  // they have left (the destructor freed them under the woken pollers: ThreadSanitizer race).
+  FakeProcessor proc;
+  std::atomic<bool> release{false};
+  auto source = std::make_unique<FakeSource>(-1);
+  source->before_next = [&release](int64_t i) {
+    while (i >= 1 && !release.load()) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  };
+  auto rt = std::make_unique<Runtime>(std::move(source), proc, options("block", 2, 8));
+  rt->start();
+  RuntimeResult first;
+  ASSERT_EQ(rt->poll(kPatienceS, &first), PollStatus::kResult);
+  std::atomic<int> stopped{0}, other{0};
+  std::vector<std::thread> pollers;
+  Runtime* const polled = rt.get();  // the pollers' own copy (rt itself is reset below)
+  for (int k = 0; k < 2; ++k) {
+    pollers.emplace_back([polled, &stopped, &other] {
+      RuntimeResult r;
+      (polled->poll(60.0, &r) == PollStatus::kStopped ? stopped : other)++;
+    });
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // both are waiting by now
+  // The capture thread is let go once the destructor has stopped the ring: frame 1 is not
+  // delivered.
+  std::thread releaser([&release] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    release = true;
+  });
+  rt.reset();
+  for (auto& t : pollers) t.join();
+  releaser.join();
+  EXPECT_EQ(stopped.load(), 2);
+  EXPECT_EQ(other.load(), 0);
+}
+
+TEST(Runtime, TwoThreadsStoppingAtOnceBothReturn) {
+  // stop() is idempotent also when called concurrently (the second used to join a thread the
+  // first had joined: std::system_error or a hang).
+  for (int round = 0; round < 20; ++round) {
+    FakeProcessor proc;
+    Runtime rt(std::make_unique<FakeSource>(-1, 0, 0.001), proc, options("drop_oldest", 2, 8));
+    rt.start();
+    std::thread a([&rt] { rt.stop(); });
+    std::thread b([&rt] { rt.stop(); });
+    a.join();
+    b.join();
+    EXPECT_EQ(rt.state(), RuntimeState::kStopped) << round;
+  }
+}
+
 TEST(Runtime, StopBeforeStartAndDestroyWithoutStart) {
   FakeProcessor proc;
   {
