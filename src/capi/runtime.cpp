@@ -202,7 +202,7 @@ EMF_API emf_status emf_runtime_poll(emf_runtime* runtime, int32_t timeout_ms,
       case emf::runtime::PollStatus::kEndOfStream:
         return fail(EMF_ERROR_END_OF_STREAM,
                     std::string(fn) + ": end of stream: " + rt.describeSource() +
-                        " is exhausted and every result was delivered (" +
+                        " is exhausted and every queued result was polled (" +
                         std::to_string(rt.counters().processed) + " frames processed, " +
                         std::to_string(rt.counters().results_dropped) +
                         " results dropped from the full queue: see emf_stats.results_dropped)");
