@@ -39,6 +39,16 @@ ErrorStats errorStats(std::vector<double> errors) {
 
 AteResult computeAte(const Trajectory& gt, const Trajectory& est, double max_diff_s) {
   const auto matches = associateStamps(gt.stamps, est.stamps, max_diff_s);
+  for (const Trajectory* t : {&gt, &est}) {
+    if (t->size() < kMinAtePairs) {
+      throw InvalidArgument(
+          "'" + t->source + "' has " +
+          (t->empty() ? std::string("no poses") : "only " + std::to_string(t->size()) + " pose") +
+          "; an ATE needs at least " + std::to_string(kMinAtePairs) +
+          " (an emf run stopped before its first tracked frame writes an "
+          "empty camera.txt)");
+    }
+  }
   if (matches.size() < kMinAtePairs) {
     throw InvalidArgument(
         "only " + std::to_string(matches.size()) + " timestamps of '" + est.source + "' (" +
@@ -180,46 +190,83 @@ TrajectoryEval evaluateTrajectory(const std::string& name, const Trajectory& gt,
   return e;
 }
 
-ObjectEval evaluateObject(int gt_id, const Trajectory& gt,
-                          const std::vector<std::pair<int, Trajectory>>& estimates,
-                          const EvalOptions& options) {
-  ObjectEval o;
-  o.gt_id = gt_id;
-  const std::string name = "object " + std::to_string(gt_id);
-  const Trajectory* best = nullptr;
-  double best_rmse = 0;
-  double best_coverage_seen = 0;
-  for (const auto& [id, est] : estimates) {
-    ObjectCandidate c;
-    c.est_id = id;
-    c.est_file = est.source;
-    const size_t matched = associateStamps(gt.stamps, est.stamps, options.max_diff_s).size();
-    c.coverage = gt.empty() ? 0.0 : static_cast<double>(matched) / static_cast<double>(gt.size());
-    best_coverage_seen = std::max(best_coverage_seen, c.coverage);
-    if (c.coverage >= options.min_object_coverage && matched >= kMinAtePairs) {
-      c.ate_rmse_m = computeAte(gt, est, options.max_diff_s).trans_m.rmse;
-      if (!best || *c.ate_rmse_m < best_rmse) {
-        best = &est;
-        best_rmse = *c.ate_rmse_m;
-        o.est_id = id;
+std::vector<ObjectEval> evaluateObjects(const std::vector<std::pair<int, Trajectory>>& gts,
+                                        const std::vector<std::pair<int, Trajectory>>& estimates,
+                                        const EvalOptions& options) {
+  // Every candidate of every ground-truth object, with its ATE where it is eligible.
+  std::vector<ObjectEval> out(gts.size());
+  std::vector<double> best_coverage(gts.size(), 0.0);
+  struct Eligible {
+    double ate_rmse_m;
+    size_t gt, est;
+  };
+  std::vector<Eligible> eligible;
+  for (size_t g = 0; g < gts.size(); ++g) {
+    const Trajectory& gt = gts[g].second;
+    out[g].gt_id = gts[g].first;
+    for (size_t e = 0; e < estimates.size(); ++e) {
+      const Trajectory& est = estimates[e].second;
+      ObjectCandidate c;
+      c.est_id = estimates[e].first;
+      c.est_file = est.source;
+      const size_t matched = associateStamps(gt.stamps, est.stamps, options.max_diff_s).size();
+      c.coverage = gt.empty() ? 0.0 : static_cast<double>(matched) / static_cast<double>(gt.size());
+      best_coverage[g] = std::max(best_coverage[g], c.coverage);
+      if (c.coverage >= options.min_object_coverage && matched >= kMinAtePairs) {
+        c.ate_rmse_m = computeAte(gt, est, options.max_diff_s).trans_m.rmse;
+        eligible.push_back({*c.ate_rmse_m, g, e});
       }
+      out[g].candidates.push_back(c);
     }
-    o.candidates.push_back(c);
   }
-  if (best) {
-    o.eval = evaluateTrajectory(name, gt, *best, options);
-  } else {
+  // One estimate per ground-truth object and vice versa: the pairs in order of ATE, each taken
+  // when neither side is taken yet. (Scored as T_object_camera, any still estimate fits any still
+  // object perfectly, so without this one estimate could be credited to several objects.)
+  std::stable_sort(eligible.begin(), eligible.end(), [](const Eligible& a, const Eligible& b) {
+    return a.ate_rmse_m < b.ate_rmse_m;
+  });
+  std::vector<bool> gt_taken(gts.size(), false), est_taken(estimates.size(), false);
+  std::vector<std::optional<size_t>> match(gts.size());
+  for (const Eligible& p : eligible) {
+    if (gt_taken[p.gt] || est_taken[p.est]) continue;
+    gt_taken[p.gt] = est_taken[p.est] = true;
+    match[p.gt] = p.est;
+  }
+  for (size_t g = 0; g < gts.size(); ++g) {
+    const Trajectory& gt = gts[g].second;
+    const std::string name = "object " + std::to_string(gts[g].first);
+    ObjectEval& o = out[g];
+    if (match[g]) {
+      o.est_id = estimates[*match[g]].first;
+      o.eval = evaluateTrajectory(name, gt, estimates[*match[g]].second, options);
+      continue;
+    }
     o.eval.name = name;
     o.eval.gt_file = gt.source;
     o.eval.gt_poses = gt.size();
-    o.eval.coverage = best_coverage_seen;
-    char text[160];
-    std::snprintf(text, sizeof(text),
-                  "no estimated object covers %.0f%% of its %zu timestamps (best %.1f%%)",
-                  options.min_object_coverage * 100, gt.size(), best_coverage_seen * 100);
+    o.eval.coverage = best_coverage[g];
+    const bool had_eligible = std::any_of(o.candidates.begin(), o.candidates.end(),
+                                          [](const ObjectCandidate& c) { return c.ate_rmse_m; });
+    char text[200];
+    if (had_eligible) {
+      std::snprintf(text, sizeof(text),
+                    "every estimated object covering %.0f%% of its %zu timestamps fits another "
+                    "ground-truth object better (one estimate per object)",
+                    options.min_object_coverage * 100, gt.size());
+    } else {
+      std::snprintf(text, sizeof(text),
+                    "no estimated object covers %.0f%% of its %zu timestamps (best %.1f%%)",
+                    options.min_object_coverage * 100, gt.size(), best_coverage[g] * 100);
+    }
     o.eval.note = estimates.empty() ? "no estimated objects" : text;
   }
-  return o;
+  return out;
+}
+
+ObjectEval evaluateObject(int gt_id, const Trajectory& gt,
+                          const std::vector<std::pair<int, Trajectory>>& estimates,
+                          const EvalOptions& options) {
+  return evaluateObjects({{gt_id, gt}}, estimates, options).front();
 }
 
 namespace {
@@ -231,7 +278,18 @@ std::map<int, std::string> numberedTrajectories(const fs::path& dir, const std::
   for (const auto& entry : fs::directory_iterator(dir)) {
     std::smatch m;
     const std::string name = entry.path().filename().string();
-    if (std::regex_match(name, m, re)) out[std::stoi(m[1].str())] = entry.path().string();
+    if (!std::regex_match(name, m, re)) continue;
+    const std::string digits = m[1].str();
+    if (digits.size() > 9) {
+      throw IoError("'" + entry.path().string() + "': id " + digits +
+                    " is too large (ids are below 10^9); rename or remove the file");
+    }
+    const int id = std::stoi(digits);
+    const auto [it, inserted] = out.emplace(id, entry.path().string());
+    if (!inserted) {
+      throw IoError("'" + entry.path().string() + "' and '" + it->second + "' both have id " +
+                    std::to_string(id) + "; remove one of them");
+    }
   }
   return out;
 }
@@ -277,10 +335,12 @@ EvalReport evaluatePaths(const std::string& gt_path, const std::string& est_path
       estimates.emplace_back(id, readTrajectory(file));
     }
   }
+  std::vector<std::pair<int, Trajectory>> gts;
+  for (const auto& [k, file] : gt_objects) gts.emplace_back(k, readTrajectory(file));
+  report.objects = evaluateObjects(gts, estimates, options);
   std::vector<int> chosen;
-  for (const auto& [k, file] : gt_objects) {
-    report.objects.push_back(evaluateObject(k, readTrajectory(file), estimates, options));
-    if (report.objects.back().est_id) chosen.push_back(*report.objects.back().est_id);
+  for (const ObjectEval& o : report.objects) {
+    if (o.est_id) chosen.push_back(*o.est_id);
   }
   for (const auto& [id, est] : estimates) {
     if (std::find(chosen.begin(), chosen.end(), id) == chosen.end()) {

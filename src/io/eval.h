@@ -33,8 +33,9 @@ struct AteResult {
   std::vector<Eigen::Vector3d> gt_positions, est_positions_aligned;
 };
 
-/// The minimum number of associated pairs for an ATE (a rigid alignment needs 3 points).
-constexpr size_t kMinAtePairs = 3;
+/// The minimum number of associated pairs for an ATE, as evaluate_ate.py (with 2 the rotation
+/// about their line is free, which leaves the residuals unchanged).
+constexpr size_t kMinAtePairs = 2;
 
 /// ATE like evaluate_ate.py: association as associate.py within `max_diff_s`, alignment of the
 /// estimate onto the ground truth (SVD of the cross-covariance, reflection-corrected). Throws
@@ -100,8 +101,16 @@ struct EvalReport {
 TrajectoryEval evaluateTrajectory(const std::string& name, const Trajectory& gt,
                                   const Trajectory& est, const EvalOptions& options);
 
-/// Matches ground-truth object `gt` to the estimate with the lowest ATE RMSE among those that
-/// cover at least options.min_object_coverage of its timestamps, and evaluates it.
+/// Matches ground-truth objects to estimated objects one to one and evaluates each match. An
+/// estimate is eligible for a ground-truth object when it covers at least
+/// options.min_object_coverage of its timestamps; the eligible pairs are taken in order of
+/// their ATE RMSE, each when neither its ground-truth object nor its estimate is taken yet
+/// (greedy). A ground-truth object left without one has a note saying why.
+std::vector<ObjectEval> evaluateObjects(const std::vector<std::pair<int, Trajectory>>& gts,
+                                        const std::vector<std::pair<int, Trajectory>>& estimates,
+                                        const EvalOptions& options);
+
+/// evaluateObjects for one ground-truth object: the eligible estimate of lowest ATE RMSE.
 ObjectEval evaluateObject(int gt_id, const Trajectory& gt,
                           const std::vector<std::pair<int, Trajectory>>& estimates,
                           const EvalOptions& options);

@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -12,6 +13,9 @@ namespace emf::io {
 
 std::vector<TableRow> readTable(const std::string& path, bool commas_separate) {
   std::ifstream in(path, std::ios::binary);
+  if (std::filesystem::is_directory(path)) {
+    throw IoError("'" + path + "' is a folder; a text file is expected there");
+  }
   if (!in) throw IoError("cannot open '" + path + "': file missing or unreadable");
   std::vector<TableRow> rows;
   std::string text;

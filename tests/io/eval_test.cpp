@@ -257,6 +257,63 @@ TEST(Eval, UnmatchedObjectIsReportedNotFatal) {
   EXPECT_NE(formatReport(r).find("object 2"), std::string::npos);
 }
 
+TEST(Eval, OneEstimatePerGroundTruthObject) {
+  // Two ground-truth objects that move alike up to a rigid offset (as two still objects do in
+  // T_object_camera): estimate 4, a copy of object 1, also fits object 2 perfectly. It is
+  // credited once; object 2 gets estimate 6 (1 cm off), not estimate 4 a second time.
+  Trajectory a, b, copy_a, near_b;
+  copy_a.source = "object-4.txt";
+  near_b.source = "object-6.txt";
+  for (int i = 0; i < 50; ++i) {
+    const double t = i / 30.0;
+    const Eigen::Isometry3d T = pose({0.02 * i, 0.5 * std::sin(0.2 * i), 1.0}, 0.03 * i, 0.01 * i);
+    a.append(t, T);
+    b.append(t, pose({1.0, 2.0, 0.0}, 0.7) * T);
+    copy_a.append(t, T);
+    near_b.append(t, pose({1.0, 2.0, 0.0}, 0.7) * pose({i % 2 ? 0.01 : -0.01, 0.0, 0.0}, 0.0) * T);
+  }
+  const std::vector<ObjectEval> r =
+      evaluateObjects({{1, a}, {2, b}}, {{4, copy_a}, {6, near_b}}, EvalOptions{});
+  ASSERT_EQ(r.size(), 2u);
+  ASSERT_TRUE(r[0].est_id && r[1].est_id);
+  EXPECT_EQ(*r[0].est_id, 4);
+  EXPECT_NEAR(r[0].eval.ate->trans_m.rmse, 0.0, kExactTolM);
+  EXPECT_EQ(*r[1].est_id, 6);
+  EXPECT_GT(r[1].eval.ate->trans_m.rmse, 0.005);
+  // Estimate 4 was eligible for object 2 at ATE 0: what made the difference is the matching.
+  for (const auto& c : r[1].candidates) {
+    if (c.est_id == 4) {
+      ASSERT_TRUE(c.ate_rmse_m.has_value());
+      EXPECT_NEAR(*c.ate_rmse_m, 0.0, kExactTolM);
+    }
+  }
+  // With estimate 4 alone, object 2 is left without one and says why.
+  const std::vector<ObjectEval> alone = evaluateObjects({{1, a}, {2, b}}, {{4, copy_a}}, {});
+  EXPECT_FALSE(alone[1].est_id.has_value());
+  EXPECT_NE(alone[1].eval.note.find("fits another ground-truth object better"), std::string::npos)
+      << alone[1].eval.note;
+}
+
+TEST(Eval, TwoPosesGiveAnAteAsTheTumToolDoes) {
+  // evaluate_ate.py needs 2 matches: here 0.05 m each after the alignment.
+  Trajectory gt, est;
+  gt.append(1.0, pose({0, 0, 0}, 0));
+  gt.append(2.0, pose({1, 0, 0}, 0));
+  est.append(1.0, pose({0, 0, 0}, 0));
+  est.append(2.0, pose({1.1, 0, 0}, 0));
+  const AteResult ate = computeAte(gt, est);
+  EXPECT_EQ(ate.pairs, 2u);
+  EXPECT_NEAR(ate.trans_m.rmse, 0.05, kExactTolM);
+  // One pose: the message says the trajectory is too short, not that the clocks differ.
+  Trajectory one;
+  one.source = "camera.txt";
+  one.append(1.0, pose({0, 0, 0}, 0));
+  expectErrorContaining([&] { computeAte(gt, one); }, {"'camera.txt' has only 1 pose"});
+  Trajectory none;
+  none.source = "empty.txt";
+  expectErrorContaining([&] { computeAte(gt, none); }, {"'empty.txt' has no poses"});
+}
+
 TEST(Eval, BadInputsAreErrorsNamingFiles) {
   const std::string dir = test::tempDir("eval");
   writeText(dir + "/est.txt", "1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 0 1\n3.0 0 0 0 0 0 0\n");
@@ -270,6 +327,25 @@ TEST(Eval, BadInputsAreErrorsNamingFiles) {
                         {"has no groundtruth.txt"});
   expectErrorContaining([&] { evaluatePaths(dir + "/nope", refEst(), EvalOptions{}); },
                         {"nope", "does not exist"});
+  // A folder where a trajectory file should be.
+  fs::create_directories(dir + "/g/groundtruth.txt");
+  expectErrorContaining([&] { evaluatePaths(dir + "/g", refEst(), EvalOptions{}); },
+                        {dir + "/g/groundtruth.txt' is a folder"});
+  // Object files: two with the same id, an id beyond int.
+  const std::string gt_dir = dir + "/gt", est_dir = dir + "/est";
+  fs::create_directories(gt_dir + "/objects");
+  fs::create_directories(est_dir);
+  fs::copy_file(refGt(), gt_dir + "/groundtruth.txt");
+  fs::copy_file(refGt(), gt_dir + "/objects/gt-object-1-camera.txt");
+  fs::copy_file(refEst(), est_dir + "/camera.txt");
+  fs::copy_file(refEst(), est_dir + "/object-3.txt");
+  fs::copy_file(refEst(), est_dir + "/object-03.txt");
+  expectErrorContaining([&] { evaluatePaths(gt_dir, est_dir, EvalOptions{}); },
+                        {"object-3.txt", "object-03.txt", "both have id 3"});
+  fs::remove(est_dir + "/object-03.txt");
+  fs::copy_file(refEst(), est_dir + "/object-99999999999.txt");
+  expectErrorContaining([&] { evaluatePaths(gt_dir, est_dir, EvalOptions{}); },
+                        {"object-99999999999.txt", "is too large"});
 }
 
 // ---- emf eval -----------------------------------------------------------------------------------
