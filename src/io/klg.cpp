@@ -49,11 +49,46 @@ KlgSource::KlgSource(const std::string& path, const SourceOptions& options, cv::
     throw IoError("KLG file '" + path + "': frame count " + std::to_string(frame_count_) +
                   " is negative; not a KLG file?");
   }
+  // A recorder that did not close its file leaves the count it wrote first (0; KlgWriter too),
+  // or a stale one: the frames after it would be ignored without a word.
+  const int64_t complete = countCompleteFrames();
+  if (complete > frame_count_) {
+    logWarning("KLG file '", path, "': the header announces ", frame_count_,
+               " frames but the file holds ", complete,
+               " complete frames (a recording that was not closed?); reading all ", complete);
+    frame_count_ = static_cast<int32_t>(complete);
+  }
   frames_to_read_ = frame_count_;
   if (options.max_frames > 0 && frames_to_read_ > options.max_frames) {
     frames_to_read_ = options.max_frames;
   }
   intrinsics_ = resolveIntrinsics(options, "", size, "KLG file '" + path + "' (stores none)");
+}
+
+int64_t KlgSource::countCompleteFrames() {
+  int64_t n = 0;
+  uint64_t at = sizeof(int32_t);
+  constexpr uint64_t kHeader = sizeof(int64_t) + 2 * sizeof(int32_t);
+  while (at + kHeader <= file_size_ && n < std::numeric_limits<int32_t>::max()) {
+    struct {
+      int64_t timestamp_us;
+      int32_t depth_size, image_size;
+    } h;
+    in_.seekg(static_cast<std::streamoff>(at));
+    if (!in_.read(reinterpret_cast<char*>(&h.timestamp_us), 8) ||
+        !in_.read(reinterpret_cast<char*>(&h.depth_size), 4) ||
+        !in_.read(reinterpret_cast<char*>(&h.image_size), 4) || h.depth_size <= 0 ||
+        h.image_size < 0 ||
+        at + kHeader + static_cast<uint64_t>(h.depth_size) + static_cast<uint64_t>(h.image_size) >
+            file_size_) {
+      break;
+    }
+    at += kHeader + static_cast<uint64_t>(h.depth_size) + static_cast<uint64_t>(h.image_size);
+    ++n;
+  }
+  in_.clear();
+  in_.seekg(static_cast<std::streamoff>(offset_));
+  return n;
 }
 
 void KlgSource::readExact(void* dst, size_t bytes, int64_t frame, const char* what) {

@@ -38,6 +38,9 @@ class KlgSource : public FrameSource {
 
  private:
   void readExact(void* dst, size_t bytes, int64_t frame, const char* what);
+  /// Complete frames in the file, found by walking the frame headers from byte 4 (stops at the
+  /// first header that is incomplete, invalid or runs past the end).
+  int64_t countCompleteFrames();
 
   std::string path_;
   std::ifstream in_;

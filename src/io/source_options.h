@@ -26,7 +26,8 @@ struct SourceOptions {
     b.real("fy", fy, 0.0, 1e5, "px", "focal length y (0 = from source)");
     b.real("cx", cx, 0.0, 1e5, "px", "principal point x (0 = from source)");
     b.real("cy", cy, 0.0, 1e5, "px", "principal point y (0 = from source)");
-    b.real("max_time_diff_s", max_time_diff_s, 0.0, 1.0, "s",
+    // Strictly less than it associates (as associate.py), so 0 would never match.
+    b.real("max_time_diff_s", max_time_diff_s, 1e-6, 1.0, "s",
            "max rgb/depth timestamp difference when associating");
     b.integer("max_frames", max_frames, 0, 100000000, "frames", "stop after N frames (0 = all)");
   }

@@ -198,6 +198,12 @@ TumSource::TumSource(const std::string& dir, const SourceOptions& options)
     throw IoError("'" + dir +
                   "' is not a TUM RGB-D folder: it has neither associations.txt nor depth.txt");
   }
+  if (entries_.empty() && !fs::exists(assoc_path) && !depth_list.empty()) {
+    throw IoError("TUM folder '" + dir + "': none of the " + std::to_string(depth_list.size()) +
+                  " depth frames of " + depth_path + " has an rgb frame within " +
+                  std::to_string(options.max_time_diff_s) + " s in " + rgb_path +
+                  "; check that both lists use the same clock, or raise ?max_time_diff_s=");
+  }
   if (entries_.empty()) {
     throw IoError("TUM folder '" + dir + "' lists no frames (" +
                   (fs::exists(assoc_path) ? assoc_path : depth_path) + " is empty)");

@@ -159,6 +159,25 @@ TEST(Klg, BrokenFilesGiveErrorsNamingFrameAndOffset) {
     w.close();
   }
   const std::string q = std::string(kIntrinsicsQuery) + "&width=8&height=6";
+  // A recording that was not closed (count 0, as KlgWriter writes first) or a stale count: every
+  // complete frame is read (they were silently ignored: 0 frames, an empty run).
+  for (const int32_t count : {0, 1}) {
+    const std::string open_file = dir + "/open" + std::to_string(count) + ".klg";
+    fs::copy_file(path, open_file);
+    {
+      std::fstream patch(open_file, std::ios::in | std::ios::out | std::ios::binary);
+      patch.write(reinterpret_cast<const char*>(&count), 4);
+    }
+    auto s = openSource("klg:" + open_file + q, SourceOptions{});
+    EXPECT_EQ(s->size(), 3) << count;
+    Frame f;
+    for (int i = 0; i < 3; ++i) {
+      ASSERT_TRUE(s->next(f)) << count << " " << i;
+      EXPECT_EQ(f.timestamp, i);
+      EXPECT_EQ(f.depth.at<float>(0, 0), 1.0f + i);
+    }
+    EXPECT_FALSE(s->next(f));
+  }
   // Truncated: cut the last frame in half.
   const std::string cut = dir + "/cut.klg";
   fs::copy_file(path, cut);

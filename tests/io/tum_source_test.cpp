@@ -402,6 +402,15 @@ TEST(TumSource, BrokenFoldersGiveErrorsNamingFileAndLine) {
     expectErrorContaining([&] { openSource("tum:" + dir, SourceOptions{}); },
                           {"not a TUM RGB-D folder", "associations.txt nor depth.txt"});
   }
+  {
+    // No rgb frame near any depth frame: said so (it used to say depth.txt is empty).
+    MiniFolder m({"1.000", "2.000"}, {"5.000"});
+    expectErrorContaining([&] { openSource("tum:" + m.dir, SourceOptions{}); },
+                          {"none of the 2 depth frames", "rgb.txt", "same clock"});
+    // A 0 s association window could never match (associate.py compares with <).
+    expectErrorContaining([&] { openSource("tum:" + m.dir + "?max_time_diff_s=0", {}); },
+                          {"max_time_diff_s"});
+  }
 }
 
 }  // namespace
