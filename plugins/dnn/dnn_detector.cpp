@@ -39,7 +39,7 @@ std::string trim(const std::string& s) {
 
 std::vector<std::string> readClassNames(const std::string& path) {
   std::ifstream in(path);
-  if (!in) {
+  if (!isReadableFile(path) || !in) {
     throw DnnError(EMF_ERROR_IO, "dnn: cannot read the class names file '" + path +
                                      "' (classes=): give a text file with one name per line");
   }
@@ -82,7 +82,7 @@ Target chooseTarget(Target requested, bool have_opencl, bool device_is_gpu, bool
 DnnDetector::DnnDetector(const DnnOptions& options) : options_(options) {
   names_ = readClassNames(options_.classes_path);
   const std::string& model = options_.model_path;
-  if (!std::ifstream(model).good()) {
+  if (!isReadableFile(model)) {
     throw DnnError(EMF_ERROR_IO, "dnn: model file '" + model +
                                      "' does not exist or is unreadable (set model= to an "
                                      "exported .onnx file)");

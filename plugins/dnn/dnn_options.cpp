@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -42,8 +43,6 @@ int parseInt(const std::string& key, const std::string& value, int lo, int hi) {
   }
   return static_cast<int>(v);
 }
-
-bool fileExists(const std::string& path) { return std::ifstream(path).good(); }
 
 /// Where the installed names are relative to this plugin's shared object (so an installation
 /// moved to another prefix still finds them); "" when this code is not in a shared object.
@@ -129,11 +128,16 @@ std::string defaultClassesPath() {
   std::string tried;
   for (const std::string& path : candidates) {
     if (path.empty()) continue;
-    if (fileExists(path)) return path;
+    if (isReadableFile(path)) return path;
     tried += (tried.empty() ? "" : ", ") + path;
   }
   throw DnnError(EMF_ERROR_CONFIG, "dnn: the shipped class names are missing (looked for " + tried +
                                        "); pass classes=/path/to/names.txt (one name per line)");
+}
+
+bool isReadableFile(const std::string& path) {
+  std::error_code ec;
+  return std::filesystem::is_regular_file(path, ec) && std::ifstream(path).good();
 }
 
 }  // namespace emf_dnn

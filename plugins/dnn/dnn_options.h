@@ -52,4 +52,7 @@ struct DnnOptions {
 /// Throws DnnError when neither exists.
 std::string defaultClassesPath();
 
+/// A regular file this process can open (a folder is not: an ifstream on one opens on Linux).
+bool isReadableFile(const std::string& path);
+
 }  // namespace emf_dnn

@@ -175,6 +175,11 @@ TEST(DnnPlugin, MissingOrNonOnnxModelFileIsAnError) {
       << not_onnx;
   const std::string no_model = loadError("layout=yolov8");
   EXPECT_NE(no_model.find("no model given: set model="), std::string::npos) << no_model;
+  // A folder is not a model file (it opened as a stream and failed as "not ONNX").
+  const std::string folder = loadError("model=" + dir);
+  EXPECT_NE(folder.find("model file '" + dir + "' does not exist or is unreadable"),
+            std::string::npos)
+      << folder;
 }
 
 TEST(DnnPlugin, ClassNameCountMismatchIsAnError) {
@@ -195,6 +200,9 @@ TEST(DnnPlugin, ClassNameCountMismatchIsAnError) {
   EXPECT_NE(missing.find("cannot read the class names file '/nonexistent/coco.names'"),
             std::string::npos)
       << missing;
+  const std::string folder = loadError("model=" + modelPath("yolov8_seg.onnx") + ",classes=" + dir);
+  EXPECT_NE(folder.find("cannot read the class names file '" + dir + "'"), std::string::npos)
+      << folder;
 }
 
 TEST(DnnPlugin, InputSizeTheModelRejectsIsAnError) {
