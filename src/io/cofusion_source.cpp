@@ -36,7 +36,12 @@ std::map<long, std::string> numberedFiles(const fs::path& dir, const std::string
     while (digits > 0 && std::isdigit(static_cast<unsigned char>(stem[digits - 1]))) --digits;
     if (digits == stem.size()) continue;
     if (!prefix.empty() && stem.substr(0, digits) != prefix) continue;
-    out[std::strtol(stem.c_str() + digits, nullptr, 10)] = entry.path().string();
+    const long number = std::strtol(stem.c_str() + digits, nullptr, 10);
+    const auto [it, inserted] = out.emplace(number, entry.path().string());
+    if (!inserted) {
+      throw IoError("'" + entry.path().string() + "' and '" + it->second + "' both have number " +
+                    std::to_string(number) + " (padded differently); remove one of them");
+    }
   }
   return out;
 }
@@ -75,8 +80,8 @@ CoFusionSource::CoFusionSource(const std::string& dir, const SourceOptions& opti
       auto it = color.find(number);
       if (it == color.end()) {
         throw IoError("Co-Fusion folder '" + dir + "': '" + depth_path +
-                      "' has no colour image with the same number (Color" + std::to_string(number) +
-                      ".png with the same zero padding)");
+                      "' has no colour image with the same number (a Color*.png numbered " +
+                      std::to_string(number) + ")");
       }
       e.color = it->second;
     }
@@ -85,6 +90,13 @@ CoFusionSource::CoFusionSource(const std::string& dir, const SourceOptions& opti
   }
   if (options.max_frames > 0 && frames_.size() > static_cast<size_t>(options.max_frames)) {
     frames_.resize(static_cast<size_t>(options.max_frames));
+  }
+  // Timestamps follow the file numbers, so a gap in the numbering is a gap in time.
+  const long span = frames_.back().number - frames_.front().number + 1;
+  if (span > static_cast<long>(frames_.size())) {
+    logWarning("Co-Fusion folder '", dir, "': ", span - static_cast<long>(frames_.size()),
+               " frame number(s) between ", frames_.front().number, " and ", frames_.back().number,
+               " have no depth file; the timestamps keep the gaps (number / fps)");
   }
   depth_size_ = readDepth(frames_[0].depth).size();
   intrinsics_ = resolveIntrinsics(options, (root / "calibration.txt").string(), depth_size_,
@@ -126,7 +138,7 @@ bool CoFusionSource::next(Frame& frame) {
   const Entry& e = frames_[cursor_];
   Frame f;
   f.index = static_cast<int64_t>(cursor_);
-  f.timestamp = f.rgb_timestamp = static_cast<double>(cursor_) / fps_;
+  f.timestamp = f.rgb_timestamp = static_cast<double>(e.number - frames_.front().number) / fps_;
   char text[64];
   std::snprintf(text, sizeof(text), "%.6f", f.timestamp);
   f.timestamp_text = text;

@@ -6,7 +6,9 @@
 //   calibration.txt        `fx fy cx cy [width height]` (or fx/fy/cx/cy from config/query)
 //   masks_id/              optional ground-truth instance ids, *####.png (8- or 16-bit, one
 //                          channel, 0 = background) -> Frame::instance_ids
-// Frames are ordered by number; timestamps are index / fps (query `fps`, default 30 Hz).
+// Frames are ordered by number; timestamps are (number - first number) / fps (query `fps`,
+// default 30 Hz), so a gap in the numbering stays a gap in time (with a warning). Two files with
+// the same number (Depth3.exr, Depth0003.exr) are an error.
 // EXR needs OpenCV's EXR codec: the reader sets OPENCV_IO_ENABLE_OPENEXR=1 before reading.
 #pragma once
 

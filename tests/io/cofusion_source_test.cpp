@@ -119,6 +119,29 @@ TEST(CoFusionSource, ErrorsNameTheFiles) {
     expectErrorContaining([&] { openSource("cofusion:" + dir, SourceOptions{}); },
                           {"not a Co-Fusion folder", "Depth####.exr"});
   }
+  {
+    // The same number padded twice: one file would have been dropped without a word.
+    const std::string dir = makeFolder();
+    fs::copy_file(dir + "/Depth0003.exr", dir + "/Depth3.exr");
+    expectErrorContaining([&] { openSource("cofusion:" + dir, SourceOptions{}); },
+                          {"Depth3.exr", "Depth0003.exr", "both have number 3"});
+  }
+}
+
+TEST(CoFusionSource, AGapInTheNumberingIsAGapInTime) {
+  // Frames 1 and 3: 2 / 30 s apart, as recorded (they were 1 / 30 s apart).
+  const std::string dir = makeFolder();
+  fs::remove(dir + "/Depth0002.exr");
+  fs::remove(dir + "/Color0002.png");
+  auto s = openSource("cofusion:" + dir, SourceOptions{});
+  EXPECT_EQ(s->size(), 2);
+  Frame f;
+  ASSERT_TRUE(s->next(f));
+  EXPECT_DOUBLE_EQ(f.timestamp, 0.0);
+  ASSERT_TRUE(s->next(f));
+  EXPECT_EQ(f.index, 1);
+  EXPECT_DOUBLE_EQ(f.timestamp, 2 / 30.0);
+  EXPECT_EQ(f.color.at<cv::Vec3b>(5, 5), cv::Vec3b(3, 6, 9));
 }
 
 }  // namespace
