@@ -41,6 +41,7 @@ std::string extendedError() {
   while (!e.empty() && (e.back() == '\n' || e.back() == ' ')) e.pop_back();
   for (auto& c : e) {
     if (c == '\n') c = ';';
+    if (c == '\t') c = ' ';  // OpenNI2 indents its log lines with tabs
   }
   return e.empty() ? "no details from OpenNI2" : e;
 }
@@ -219,9 +220,12 @@ Openni2Source::Openni2Source(const std::string& uri, const io::SourceOptions& op
   device_uri_ = target;
   m.uri = target;
   if (m.device.open(target.c_str()) != openni::STATUS_OK) {
-    throw IoError("openni2: cannot open device '" + target + "' (" + extendedError() +
-                  "): check that it is plugged in and not used by another program; "
-                  "`emf devices` lists what OpenNI2 sees");
+    const bool virtual_device = target.rfind("emf-virtual://", 0) == 0;
+    throw IoError("openni2: cannot open device '" + target + "' (" + extendedError() + "): " +
+                  (virtual_device ? std::string("fix the folder as the message says")
+                                  : std::string("check that it is plugged in and not used by "
+                                                "another program")) +
+                  "; `emf devices` lists what OpenNI2 sees");
   }
   live_ = !m.device.isFile();
   if (!live_) {

@@ -32,9 +32,9 @@ int cmdEval(const std::vector<std::string>& args) {
               "Evaluates trajectories like the TUM RGB-D tools: ATE (timestamps associated "
               "within --max-diff, rigid Horn alignment, RMSE/mean/median/max) and RPE (fixed "
               "delta, translational and rotational RMSE) for the camera and for every "
-              "ground-truth object (objects/gt-object-<k>-camera.txt), each matched to the "
-              "estimated object-<id>.txt with the lowest ATE among those covering at least "
-              "--min-coverage of its timestamps. Prints a table and writes eval.json and "
+              "ground-truth object (objects/gt-object-<k>-camera.txt), matched one to one to "
+              "the estimated object-<id>.txt files that cover at least --min-coverage of its "
+              "timestamps, pairs of lowest ATE first. Prints a table and writes eval.json and "
               "eval.png.");
   p.option("gt", &gt, "PATH", "dataset folder (groundtruth.txt, objects/) or trajectory file");
   p.option("est", &est, "PATH", "emf output folder (camera.txt, object-<id>.txt) or file");

@@ -169,6 +169,12 @@ int cmdRun(const std::vector<std::string>& args) {
               static_cast<long long>(slam.framesProcessed()),
               static_cast<long long>(slam.framesLost()), info.wall_s, s.at("total").median_ms,
               s.at("total").p90_ms);
+  if (info.frames_not_in_trajectories > 0) {
+    std::printf(
+        "  %lld tracked frame(s) left out of camera.txt: their timestamp was not after the last "
+        "one written (run.json frames_not_in_trajectories)\n",
+        static_cast<long long>(info.frames_not_in_trajectories));
+  }
   for (const auto& stage : pipeline::SlamSystem::stageNames()) {
     std::printf("  %-10s %7.2f ms median  %7.2f ms p90\n", stage.c_str(), s.at(stage).median_ms,
                 s.at(stage).p90_ms);

@@ -54,9 +54,12 @@ std::string closest(const std::string& key, const std::vector<std::string>& cand
   return best;
 }
 
+/// "--set s.k=v" is parsed as a two-line document made here: its line numbers mean nothing.
+bool hasLines(const std::string& origin) { return origin.rfind("--set ", 0) != 0; }
+
 std::string where(const std::string& origin, const YAML::Node& node) {
   const YAML::Mark m = node.Mark();
-  if (m.line >= 0) return origin + ":" + std::to_string(m.line + 1);
+  if (m.line >= 0 && hasLines(origin)) return origin + ":" + std::to_string(m.line + 1);
   return origin;
 }
 
@@ -339,7 +342,7 @@ void Config::merge(const std::string& yaml, const std::string& origin) {
   try {
     root = YAML::Load(yaml);
   } catch (const YAML::Exception& e) {
-    throw ConfigError(origin + ":" + std::to_string(e.mark.line + 1) +
+    throw ConfigError(origin + (hasLines(origin) ? ":" + std::to_string(e.mark.line + 1) : "") +
                       ": not valid YAML: " + e.msg);
   }
   if (!root || root.IsNull()) return;  // empty file: all defaults

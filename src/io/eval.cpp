@@ -45,8 +45,9 @@ AteResult computeAte(const Trajectory& gt, const Trajectory& est, double max_dif
           "'" + t->source + "' has " +
           (t->empty() ? std::string("no poses") : "only " + std::to_string(t->size()) + " pose") +
           "; an ATE needs at least " + std::to_string(kMinAtePairs) +
-          " (an emf run stopped before its first tracked frame writes an "
-          "empty camera.txt)");
+          (t == &est && t->empty()
+               ? " (an emf run stopped before its first tracked frame writes an empty camera.txt)"
+               : ""));
     }
   }
   if (matches.size() < kMinAtePairs) {
@@ -244,9 +245,14 @@ std::vector<ObjectEval> evaluateObjects(const std::vector<std::pair<int, Traject
     o.eval.name = name;
     o.eval.gt_file = gt.source;
     o.eval.gt_poses = gt.size();
-    o.eval.coverage = best_coverage[g];
     const bool had_eligible = std::any_of(o.candidates.begin(), o.candidates.end(),
                                           [](const ObjectCandidate& c) { return c.ate_rmse_m; });
+    // Its coverage: the best of all candidates when none was eligible (what the note explains),
+    // else the best among the estimates still free (those taken belong to other objects).
+    o.eval.coverage = had_eligible ? 0.0 : best_coverage[g];
+    for (size_t e = 0; had_eligible && e < estimates.size(); ++e) {
+      if (!est_taken[e]) o.eval.coverage = std::max(o.eval.coverage, o.candidates[e].coverage);
+    }
     char text[200];
     if (had_eligible) {
       std::snprintf(text, sizeof(text),

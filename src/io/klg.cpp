@@ -98,8 +98,10 @@ void KlgSource::readExact(void* dst, size_t bytes, int64_t frame, const char* wh
                   (frame >= 0 ? ", frame " + std::to_string(frame) : std::string()) +
                   ": file ends at byte " + std::to_string(file_size_) + " while reading the " +
                   what + " (" + std::to_string(bytes) + " bytes at byte " +
-                  std::to_string(offset_) + "); the header announces " +
-                  std::to_string(frame_count_) + " frames: truncated recording?");
+                  std::to_string(offset_) + ")" +
+                  (frame >= 0 ? "; the header announces " + std::to_string(frame_count_) +
+                                    " frames: truncated recording?"
+                              : std::string(": not a KLG file (empty or truncated)")));
   }
   offset_ += bytes;
 }

@@ -105,6 +105,17 @@ TEST(Config, SetOverridesOneKey) {
   EXPECT_EQ(c.cl.device, "pthread");
   EXPECT_THROW(c.set("map.memory_mb"), ConfigError);
   EXPECT_THROW(c.set("map.memry_mb=3"), ConfigError);
+  // The message names the assignment, without the line of the document it is parsed as.
+  try {
+    c.set("map.memory_mb=0");
+    ADD_FAILURE() << "memory_mb 0 accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("--set map.memory_mb=0: map.memory_mb: value 0 is out "
+                                          "of range",
+                                          0),
+              0u)
+        << e.what();
+  }
 }
 
 TEST(Config, ValidateCatchesProgrammaticErrors) {

@@ -292,6 +292,7 @@ TEST(Eval, OneEstimatePerGroundTruthObject) {
   EXPECT_FALSE(alone[1].est_id.has_value());
   EXPECT_NE(alone[1].eval.note.find("fits another ground-truth object better"), std::string::npos)
       << alone[1].eval.note;
+  EXPECT_EQ(alone[1].eval.coverage, 0.0);  // no estimate left for it covers anything
 }
 
 TEST(Eval, TwoPosesGiveAnAteAsTheTumToolDoes) {

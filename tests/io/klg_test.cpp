@@ -211,6 +211,13 @@ TEST(Klg, BrokenFilesGiveErrorsNamingFrameAndOffset) {
   expectErrorContaining([&] { openSource("klg:" + dir + "/none.klg" + q, SourceOptions{}); },
                         {"none.klg", "does not exist"});
   {
+    const std::string empty = dir + "/empty.klg";
+    std::ofstream(empty, std::ios::binary) << "ab";
+    expectErrorContaining([&] { openSource("klg:" + empty + q, SourceOptions{}); },
+                          {"file ends at byte 2 while reading the frame count",
+                           "not a KLG file (empty or truncated)"});
+  }
+  {
     const std::string neg = dir + "/neg.klg";
     std::ofstream out(neg, std::ios::binary);
     const int32_t count = -5;
