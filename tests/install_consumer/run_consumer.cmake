@@ -48,3 +48,28 @@ if(NOT rc EQUAL 0 OR NOT out MATCHES "end frames=2 produced=2 dropped=0")
   message(FATAL_ERROR "FAILED: installed example exited ${rc}: ${out}\n${err}")
 endif()
 message("example(installed): ${out}")
+
+# Plugins by name come from the installation, not from the build tree that made it: the installed
+# CLI (emf_internal linked in) and the installed library (through the example) both load them
+# from <prefix>/lib/emf/plugins. (They looked in the configure-time prefix and the build tree.)
+set(ENV{EMF_LOG_LEVEL} info)
+execute_process(COMMAND ${prefix}/bin/emf run --quiet --source "synth:room?frames=2&width=64&height=48"
+                        --set map.memory_mb=16 --detector nosuch --out ${WORK_DIR}/run-nosuch
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 1 OR NOT err MATCHES "  ${prefix}/lib/emf/plugins\n" OR
+   err MATCHES "${EMF_BINARY_DIR}/plugins\n")
+  message(FATAL_ERROR "FAILED: installed emf's plugin search path (exit ${rc}):\n${err}")
+endif()
+execute_process(COMMAND ${prefix}/bin/emf run --quiet --source "synth:cars?frames=2&width=64&height=48"
+                        --set map.memory_mb=16 --detector motion --out ${WORK_DIR}/run-motion
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR NOT err MATCHES "loaded from ${prefix}/lib/emf/plugins/libemf_detector_motion.so")
+  message(FATAL_ERROR "FAILED: installed emf --detector motion (exit ${rc}):\n${err}")
+endif()
+execute_process(COMMAND ${WORK_DIR}/examples/track_objects "synth:cars?frames=2&width=64&height=48"
+                        "{map: {memory_mb: 16}, detector: {plugin: motion}}"
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR NOT err MATCHES "loaded from ${prefix}/lib/emf/plugins/libemf_detector_motion.so")
+  message(FATAL_ERROR "FAILED: installed library's plugin lookup (exit ${rc}):\n${out}\n${err}")
+endif()
+message("plugins(installed): found in ${prefix}/lib/emf/plugins")
