@@ -26,6 +26,9 @@ PRESETS="cars,occlusion"
 TIMING=0
 SIZES="320x240,640x480"
 while [[ $# -gt 0 ]]; do
+  if [[ "$1" != --timing && "$1" != -h && "$1" != --help && ( $# -lt 2 || -z "$2" ) ]]; then
+    echo "objects_bench: $1 needs a value (see --help)" >&2; exit 2
+  fi
   case "$1" in
     --timing) TIMING=1; shift ;;
     --sizes) SIZES="$2"; shift 2 ;;
@@ -38,6 +41,14 @@ while [[ $# -gt 0 ]]; do
     *) echo "objects_bench: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
+size_ok() { [[ "$1" =~ ^[1-9][0-9]*x[1-9][0-9]*$ ]]; }
+size_ok "$SIZE" || { echo "objects_bench: --size $SIZE: expected WxH, e.g. 320x240" >&2; exit 2; }
+IFS=, read -ra _sizes <<<"$SIZES"
+for s in "${_sizes[@]}"; do
+  size_ok "$s" || { echo "objects_bench: --sizes: '$s' is not WxH, e.g. 320x240" >&2; exit 2; }
+done
+[[ "$FRAMES" =~ ^[1-9][0-9]*$ ]] || { echo "objects_bench: --frames $FRAMES: expected a positive integer" >&2; exit 2; }
+[[ -n "${PRESETS//,/}" ]] || { echo "objects_bench: --presets names no preset" >&2; exit 2; }
 [[ -x "$EMF" ]] || { echo "objects_bench: no emf binary at $EMF (build first or pass --emf)" >&2; exit 2; }
 mkdir -p "$OUT"
 

@@ -16,8 +16,11 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -75,6 +78,18 @@ void usage() {
       "  --peer-stride N   frame pixels used by the peer's ICP (default width/160)\n");
 }
 
+/// `text` as an integer in [lo, hi]; a usage error naming `flag` otherwise.
+int intArg(const char* flag, const std::string& text, int lo, int hi) {
+  char* end = nullptr;
+  errno = 0;
+  const long v = std::strtol(text.c_str(), &end, 10);
+  if (text.empty() || *end != '\0' || errno == ERANGE || v < lo || v > hi) {
+    throw emf::InvalidArgument(std::string(flag) + " " + text + ": expected an integer in [" +
+                               std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  }
+  return static_cast<int>(v);
+}
+
 Args parseArgs(int argc, char** argv) {
   Args a;
   for (int i = 1; i < argc; ++i) {
@@ -93,8 +108,7 @@ Args parseArgs(int argc, char** argv) {
         if (!item.empty()) a.data.push_back(item);
       }
     } else if (k == "--frames") {
-      a.frames = std::stoi(value());
-      if (a.frames < 3) throw emf::InvalidArgument("--frames must be >= 3 (ATE needs 3 poses)");
+      a.frames = intArg("--frames", value(), static_cast<int>(emf::io::kMinAtePairs), 100000);
     } else if (k == "--res") {
       const std::string r = value();
       if (r == "640") {
@@ -117,7 +131,7 @@ Args parseArgs(int argc, char** argv) {
     } else if (k == "--set") {
       a.sets.push_back(value());
     } else if (k == "--peer-stride") {
-      a.peer_source_stride = std::stoi(value());
+      a.peer_source_stride = intArg("--peer-stride", value(), 1, 64);
     } else {
       std::fprintf(stderr, "slam_bench: unknown option %s (see --help)\n", k.c_str());
       std::exit(2);
@@ -143,8 +157,20 @@ Dataset resolveDataset(const std::string& d, const Resolution& res) {
                 "&height=" + std::to_string(res.height) + "&seed=1",
             5000};
   }
-  if (d.rfind("synth:", 0) == 0) return {d.substr(6), d, 5000};
-  return {fs::path(d).filename().string(), "tum:" + d, 5000};
+  // The name becomes a folder under --out: one plain component, never "", "." or "..".
+  auto folderName = [](std::string name) {
+    for (char& c : name) {
+      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
+    }
+    return name;
+  };
+  if (d.rfind("synth:", 0) == 0) return {"synth-" + folderName(d.substr(6)), d, 5000};
+  std::error_code ec;
+  const std::string name = fs::weakly_canonical(fs::absolute(d), ec).filename().string();
+  if (name.empty() || name == "." || name == "..") {
+    throw std::runtime_error("--data '" + d + "': cannot name a work folder after it");
+  }
+  return {folderName(name), "tum:" + d, 5000};
 }
 
 /// 2x2-block depth down-sampling by an integer factor: mean of the valid samples within 3 cm
@@ -296,134 +322,160 @@ std::string fmt(double v, int decimals = 2) {
 
 int main(int argc, char** argv) {
   try {
-    const Args a = parseArgs(argc, argv);
-    const emf::Config defaults;
+    Args a = parseArgs(argc, argv);
+    if (a.data.empty()) throw emf::InvalidArgument("--data names no dataset");
+    // The configuration emf runs with (--config, the resolution's voxel size and volume, then
+    // --set): the peer gets the same voxel size, truncation and depth range, and the summary
+    // names the voxel size actually used.
+    emf::Config defaults = a.config.empty() ? emf::Config() : emf::Config::loadFile(a.config);
+    defaults.set("map.background_voxel_m=" + fmt(a.res.voxel_m, 3));
+    defaults.set("map.background_resolution=" + std::to_string(a.res.volume_voxels));
+    for (const auto& set : a.sets) defaults.set(set);
+    defaults.validate();
+    a.res.voxel_m = defaults.map.background_voxel_m;
     fs::create_directories(a.out);
+    int failed = 0;
     std::vector<std::string> lines;
     std::printf("slam_bench: %dx%d @ %.0f cm, up to %d frames per dataset, peer %s\n", a.res.width,
                 a.res.height, a.res.voxel_m * 100, a.frames, a.peer ? "Open3D" : "off");
     for (const std::string& name : a.data) {
-      const Dataset d = resolveDataset(name, a.res);
-      const std::string dir = fs::absolute(a.out + "/" + d.name).string();
-      const std::string frames_dir = dir + "/frames";
-      const int n = prepareFrames(d, a, frames_dir);
-      const emf::io::Trajectory gt = emf::io::readTrajectory(frames_dir + "/groundtruth.txt");
-      std::printf("\n== %s: %d frames (%s)\n", d.name.c_str(), n, d.uri.c_str());
+      try {
+        const Dataset d = resolveDataset(name, a.res);
+        const std::string dir = fs::absolute(a.out + "/" + d.name).string();
+        const std::string frames_dir = dir + "/frames";
+        const int n = prepareFrames(d, a, frames_dir);
+        const emf::io::Trajectory gt = emf::io::readTrajectory(frames_dir + "/groundtruth.txt");
+        std::printf("\n== %s: %d frames (%s)\n", d.name.c_str(), n, d.uri.c_str());
 
-      // ---- emf ----
-      SystemFigures e;
-      std::vector<std::string> cmd = {
-          a.emf,
-          "run",
-          "--source",
-          "tum:" + frames_dir + "?depth_scale=5000",
-          "--out",
-          dir + "/emf",
-          "--quiet",
-          "--set",
-          "map.background_voxel_m=" + fmt(a.res.voxel_m, 3),
-          "--set",
-          "map.background_resolution=" + std::to_string(a.res.volume_voxels)};
-      if (!a.config.empty()) cmd.insert(cmd.begin() + 2, {"--config", a.config});
-      for (const auto& s : a.sets) cmd.insert(cmd.end(), {"--set", s});
-      const ChildResult er = runChild(cmd, dir + "/emf.log");
-      if (er.exit_code != 0) {
-        std::fprintf(stderr, "slam_bench: emf run failed (exit %d); its log %s ends:\n%s\n",
-                     er.exit_code, (dir + "/emf.log").c_str(), tail(dir + "/emf.log").c_str());
-        return 1;
-      }
-      const nlohmann::json run = readJson(dir + "/emf/run.json");
-      const emf::io::Trajectory est = emf::io::readTrajectory(dir + "/emf/camera.txt");
-      e.ran = true;
-      e.poses = est.size();
-      e.lost = run.at("lost_frames").get<int>();
-      e.ms = run.at("ms_per_frame").at("total").at("median_ms").get<double>();
-      e.p90_ms = run.at("ms_per_frame").at("total").at("p90_ms").get<double>();
-      e.rss_mb = er.peak_rss_mb;
-      if (est.size() >= emf::io::kMinAtePairs) {
-        e.ate_cm = emf::io::computeAte(gt, est).trans_m.rmse * 100;
-      }
-      const auto& mem = run.at("memory");
-      std::printf(
-          "emf:   ATE %s cm over %zu poses (%d lost), %s ms/frame median, %s p90, "
-          "peak RSS %.0f MB, pool %.0f MB (%lld of %lld slots used), wall %.1f s\n",
-          fmt(e.ate_cm, 3).c_str(), e.poses, e.lost, fmt(e.ms).c_str(), fmt(e.p90_ms).c_str(),
-          e.rss_mb, mem.at("pool_bytes").get<double>() / (1 << 20),
-          mem.at("used_slots").get<long long>(), mem.at("pool_slots").get<long long>(), er.wall_s);
-      std::printf("       stages (median / p90 ms):");
-      for (const auto& [stage, s] : run.at("ms_per_frame").items()) {
-        if (stage == "total") continue;
-        std::printf(" %s %s / %s", stage.c_str(), fmt(s.at("median_ms").get<double>()).c_str(),
-                    fmt(s.at("p90_ms").get<double>()).c_str());
-      }
-      std::printf("\n");
-      // Work per frame: figures the machine's load does not change (and the child's CPU time,
-      // which other processes change less than the wall clock; it includes loading the images).
-      std::printf("       work (median / p90 per frame):");
-      for (const auto& [counter, c] : run.at("work_per_frame").items()) {
-        std::printf(" %s %s / %s", counter.c_str(), fmt(c.at("median").get<double>(), 1).c_str(),
-                    fmt(c.at("p90").get<double>(), 1).c_str());
-      }
-      std::printf("; process CPU %s ms/frame\n",
-                  fmt(1e3 * er.cpu_s / std::max<size_t>(1, e.poses)).c_str());
-      for (const auto& l : run.at("lost")) {
-        std::printf("       lost frame %lld: %s\n", l.at("index").get<long long>(),
-                    l.at("reason").get<std::string>().c_str());
-      }
-
-      // ---- peer ----
-      SystemFigures p;
-      if (a.peer) {
-        const int stride =
-            a.peer_source_stride > 0 ? a.peer_source_stride : std::max(1, a.res.width / 160);
-        std::vector<std::string> pcmd = {
-            a.python,          a.peer_script,
-            "--data",          frames_dir,
-            "--out",           dir + "/peer",
-            "--depth-scale",   "5000",
-            "--voxel",         fmt(a.res.voxel_m, 3),
-            "--trunc-voxels",  std::to_string(defaults.map.truncation_voxels),
-            "--depth-min",     fmt(defaults.preprocess.min_depth_m, 3),
-            "--depth-max",     fmt(defaults.preprocess.max_depth_m, 3),
-            "--source-stride", std::to_string(stride),
-            "--target-stride", std::to_string(std::max(1, stride / 2))};
-        const ChildResult pr = runChild(pcmd, dir + "/peer.log");
-        if (pr.exit_code != 0) {
-          std::fprintf(stderr, "slam_bench: the Open3D peer failed (exit %d); %s ends:\n%s\n",
-                       pr.exit_code, (dir + "/peer.log").c_str(), tail(dir + "/peer.log").c_str());
-          return 1;
+        // ---- emf ----
+        SystemFigures e;
+        std::vector<std::string> cmd = {
+            a.emf,
+            "run",
+            "--source",
+            "tum:" + frames_dir + "?depth_scale=5000",
+            "--out",
+            dir + "/emf",
+            "--quiet",
+            "--set",
+            "map.background_voxel_m=" + fmt(a.res.voxel_m, 3),
+            "--set",
+            "map.background_resolution=" + std::to_string(a.res.volume_voxels)};
+        if (!a.config.empty()) cmd.insert(cmd.begin() + 2, {"--config", a.config});
+        for (const auto& s : a.sets) cmd.insert(cmd.end(), {"--set", s});
+        const ChildResult er = runChild(cmd, dir + "/emf.log");
+        if (er.exit_code != 0) {
+          std::fprintf(stderr, "slam_bench: %s: emf run failed (exit %d); its log %s ends:\n%s\n",
+                       d.name.c_str(), er.exit_code, (dir + "/emf.log").c_str(),
+                       tail(dir + "/emf.log").c_str());
+          ++failed;
+          continue;  // no figures for it; the other datasets still run and print theirs
         }
-        const nlohmann::json pj = readJson(dir + "/peer/peer.json");
-        const emf::io::Trajectory pest = emf::io::readTrajectory(dir + "/peer/camera.txt");
-        const auto ms = pj.at("ms_per_frame").get<std::vector<double>>();
-        p.ran = true;
-        p.poses = pest.size();
-        p.ms = percentile(ms, 0.5);
-        p.p90_ms = percentile(ms, 0.9);
-        p.rss_mb = pr.peak_rss_mb;
-        p.ate_cm = emf::io::computeAte(gt, pest).trans_m.rmse * 100;
+        const nlohmann::json run = readJson(dir + "/emf/run.json");
+        const emf::io::Trajectory est = emf::io::readTrajectory(dir + "/emf/camera.txt");
+        e.ran = true;
+        e.poses = est.size();
+        e.lost = run.at("lost_frames").get<int>();
+        e.ms = run.at("ms_per_frame").at("total").at("median_ms").get<double>();
+        e.p90_ms = run.at("ms_per_frame").at("total").at("p90_ms").get<double>();
+        e.rss_mb = er.peak_rss_mb;
+        if (est.size() >= emf::io::kMinAtePairs) {
+          e.ate_cm = emf::io::computeAte(gt, est).trans_m.rmse * 100;
+        }
+        const auto& mem = run.at("memory");
         std::printf(
-            "peer:  ATE %s cm over %zu poses, %s ms/frame median, %s p90, peak RSS %.0f MB, "
-            "wall %.1f s\n       ran: %s\n",
-            fmt(p.ate_cm, 3).c_str(), p.poses, fmt(p.ms).c_str(), fmt(p.p90_ms).c_str(), p.rss_mb,
-            pr.wall_s, pj.at("ran").get<std::string>().c_str());
-        std::printf("ratio: ATE emf/peer %s, speed peer/emf %s, peak RSS emf/peer %s\n",
-                    fmt(e.ate_cm / p.ate_cm).c_str(), fmt(p.ms / e.ms).c_str(),
-                    fmt(e.rss_mb / p.rss_mb).c_str());
+            "emf:   ATE %s cm over %zu poses (%d lost), %s ms/frame median, %s p90, "
+            "peak RSS %.0f MB, pool %.0f MB (%lld of %lld slots used), wall %.1f s\n",
+            fmt(e.ate_cm, 3).c_str(), e.poses, e.lost, fmt(e.ms).c_str(), fmt(e.p90_ms).c_str(),
+            e.rss_mb, mem.at("pool_bytes").get<double>() / (1 << 20),
+            mem.at("used_slots").get<long long>(), mem.at("pool_slots").get<long long>(),
+            er.wall_s);
+        std::printf("       stages (median / p90 ms):");
+        for (const auto& [stage, s] : run.at("ms_per_frame").items()) {
+          if (stage == "total") continue;
+          std::printf(" %s %s / %s", stage.c_str(), fmt(s.at("median_ms").get<double>()).c_str(),
+                      fmt(s.at("p90_ms").get<double>()).c_str());
+        }
+        std::printf("\n");
+        // Work per frame: figures the machine's load does not change (and the child's CPU time,
+        // which other processes change less than the wall clock; it includes loading the images).
+        std::printf("       work (median / p90 per frame):");
+        for (const auto& [counter, c] : run.at("work_per_frame").items()) {
+          std::printf(" %s %s / %s", counter.c_str(), fmt(c.at("median").get<double>(), 1).c_str(),
+                      fmt(c.at("p90").get<double>(), 1).c_str());
+        }
+        std::printf("; process CPU %s ms/frame\n",
+                    fmt(1e3 * er.cpu_s / std::max(1, run.at("frames").get<int>())).c_str());
+        for (const auto& l : run.at("lost")) {
+          std::printf("       lost frame %lld: %s\n", l.at("index").get<long long>(),
+                      l.at("reason").get<std::string>().c_str());
+        }
+
+        // ---- peer ----
+        SystemFigures p;
+        if (a.peer) {
+          const int stride =
+              a.peer_source_stride > 0 ? a.peer_source_stride : std::max(1, a.res.width / 160);
+          std::vector<std::string> pcmd = {
+              a.python,          a.peer_script,
+              "--data",          frames_dir,
+              "--out",           dir + "/peer",
+              "--depth-scale",   "5000",
+              "--voxel",         fmt(a.res.voxel_m, 3),
+              "--trunc-voxels",  std::to_string(defaults.map.truncation_voxels),
+              "--depth-min",     fmt(defaults.preprocess.min_depth_m, 3),
+              "--depth-max",     fmt(defaults.preprocess.max_depth_m, 3),
+              "--source-stride", std::to_string(stride),
+              "--target-stride", std::to_string(std::max(1, stride / 2))};
+          const ChildResult pr = runChild(pcmd, dir + "/peer.log");
+          if (pr.exit_code != 0) {
+            std::fprintf(stderr, "slam_bench: %s: the Open3D peer failed (exit %d); %s ends:\n%s\n",
+                         d.name.c_str(), pr.exit_code, (dir + "/peer.log").c_str(),
+                         tail(dir + "/peer.log").c_str());
+            ++failed;
+            continue;
+          }
+          const nlohmann::json pj = readJson(dir + "/peer/peer.json");
+          const emf::io::Trajectory pest = emf::io::readTrajectory(dir + "/peer/camera.txt");
+          const auto ms = pj.at("ms_per_frame").get<std::vector<double>>();
+          p.ran = true;
+          p.poses = pest.size();
+          p.ms = percentile(ms, 0.5);
+          p.p90_ms = percentile(ms, 0.9);
+          p.rss_mb = pr.peak_rss_mb;
+          p.ate_cm = emf::io::computeAte(gt, pest).trans_m.rmse * 100;
+          std::printf(
+              "peer:  ATE %s cm over %zu poses, %s ms/frame median, %s p90, peak RSS %.0f MB, "
+              "wall %.1f s\n       ran: %s\n",
+              fmt(p.ate_cm, 3).c_str(), p.poses, fmt(p.ms).c_str(), fmt(p.p90_ms).c_str(), p.rss_mb,
+              pr.wall_s, pj.at("ran").get<std::string>().c_str());
+          std::printf("ratio: ATE emf/peer %s, speed peer/emf %s, peak RSS emf/peer %s\n",
+                      fmt(e.ate_cm / p.ate_cm).c_str(), fmt(p.ms / e.ms).c_str(),
+                      fmt(e.rss_mb / p.rss_mb).c_str());
+        }
+        char line[512];
+        std::snprintf(line, sizeof line,
+                      "slam_bench data=%s res=%dx%d voxel_m=%.3f emf_ate_cm=%s emf_ms=%s "
+                      "emf_p90_ms=%s emf_lost=%d emf_rss_mb=%.0f peer_ate_cm=%s peer_ms=%s "
+                      "peer_rss_mb=%s speedup=%s",
+                      d.name.c_str(), a.res.width, a.res.height, a.res.voxel_m,
+                      fmt(e.ate_cm, 3).c_str(), fmt(e.ms).c_str(), fmt(e.p90_ms).c_str(), e.lost,
+                      e.rss_mb, fmt(p.ate_cm, 3).c_str(), fmt(p.ms).c_str(),
+                      fmt(p.rss_mb, 0).c_str(), fmt(p.ms / e.ms).c_str());
+        lines.push_back(line);
+      } catch (const std::exception& ex) {
+        // One dataset failing (a broken folder, no ground truth) keeps the others' figures.
+        std::fprintf(stderr, "slam_bench: %s: %s\n", name.c_str(), ex.what());
+        ++failed;
       }
-      char line[512];
-      std::snprintf(line, sizeof line,
-                    "slam_bench data=%s res=%dx%d voxel_m=%.3f emf_ate_cm=%s emf_ms=%s "
-                    "emf_p90_ms=%s emf_lost=%d emf_rss_mb=%.0f peer_ate_cm=%s peer_ms=%s "
-                    "peer_rss_mb=%s speedup=%s",
-                    d.name.c_str(), a.res.width, a.res.height, a.res.voxel_m,
-                    fmt(e.ate_cm, 3).c_str(), fmt(e.ms).c_str(), fmt(e.p90_ms).c_str(), e.lost,
-                    e.rss_mb, fmt(p.ate_cm, 3).c_str(), fmt(p.ms).c_str(), fmt(p.rss_mb, 0).c_str(),
-                    fmt(p.ms / e.ms).c_str());
-      lines.push_back(line);
     }
     std::printf("\n");
     for (const auto& l : lines) std::printf("%s\n", l.c_str());
+    if (failed > 0) {
+      std::fprintf(stderr, "slam_bench: %d of %zu dataset(s) failed (see above)\n", failed,
+                   a.data.size());
+      return 1;
+    }
     return 0;
   } catch (const std::exception& ex) {
     std::fprintf(stderr, "slam_bench: %s\n", ex.what());
