@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <deque>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
@@ -9,8 +10,31 @@
 namespace emf_motion {
 
 bool MotionOptions::parse(const std::string& config, std::string* error) {
+  // Every key with its range: a fraction above 1 or an integer beyond int would silently turn a
+  // rule off (min_area_px=1e12 wrapped to a negative area and disabled the size filter).
+  struct Key {
+    const char* name;
+    double lo, hi;
+    bool integer;
+    double* real;
+    int* whole;
+  };
+  const Key keys[] = {
+      {"strong_residual_m", 0.0, 1.0, false, &strong_residual_m, nullptr},
+      {"weak_residual_m", 0.0, 1.0, false, &weak_residual_m, nullptr},
+      {"max_association", 0.0, 1.0, false, &max_association, nullptr},
+      {"depth_jump_m", 0.0, 1.0, false, &depth_jump_m, nullptr},
+      {"depth_jump_rel", 0.0, 1.0, false, &depth_jump_rel, nullptr},
+      {"min_area_px", 1, 307200, true, nullptr, &min_area_px},
+      {"max_area_fraction", 0.0, 1.0, false, &max_area_fraction, nullptr},
+      {"min_consecutive", 1, 100, true, nullptr, &min_consecutive},
+      {"persist_iou", 0.0, 1.0, false, &persist_iou, nullptr},
+      {"open_radius_px", 0, 32, true, nullptr, &open_radius_px},
+  };
+  std::string names;
+  for (const Key& k : keys) names += std::string(names.empty() ? "" : ", ") + k.name;
   std::stringstream ss(config);
-  std::string item;
+  std::string item, seen = ",";
   while (std::getline(ss, item, ',')) {
     if (item.empty()) continue;
     const auto eq = item.find('=');
@@ -19,38 +43,33 @@ bool MotionOptions::parse(const std::string& config, std::string* error) {
       return false;
     }
     const std::string key = item.substr(0, eq), value = item.substr(eq + 1);
-    char* end = nullptr;
-    const double v = std::strtod(value.c_str(), &end);
-    if (end == value.c_str() || *end != '\0' || !std::isfinite(v) || v < 0) {
-      *error = "motion: " + key + " needs a non-negative number, got '" + value + "'";
+    const Key* k = nullptr;
+    for (const Key& candidate : keys) {
+      if (key == candidate.name) k = &candidate;
+    }
+    if (!k) {
+      *error = "motion: unknown key '" + key + "' (" + names + ")";
       return false;
     }
-    if (key == "strong_residual_m")
-      strong_residual_m = v;
-    else if (key == "weak_residual_m")
-      weak_residual_m = v;
-    else if (key == "max_association")
-      max_association = v;
-    else if (key == "depth_jump_m")
-      depth_jump_m = v;
-    else if (key == "depth_jump_rel")
-      depth_jump_rel = v;
-    else if (key == "min_area_px")
-      min_area_px = static_cast<int>(v);
-    else if (key == "max_area_fraction")
-      max_area_fraction = v;
-    else if (key == "min_consecutive")
-      min_consecutive = static_cast<int>(v);
-    else if (key == "persist_iou")
-      persist_iou = v;
-    else if (key == "open_radius_px")
-      open_radius_px = static_cast<int>(v);
-    else {
-      *error = "motion: unknown key '" + key +
-               "' (strong_residual_m, weak_residual_m, max_association, depth_jump_m, "
-               "depth_jump_rel, min_area_px, max_area_fraction, min_consecutive, persist_iou, "
-               "open_radius_px)";
+    if (seen.find("," + key + ",") != std::string::npos) {
+      *error = "motion: " + key + " is given twice";
       return false;
+    }
+    seen += key + ",";
+    char* end = nullptr;
+    const double v = std::strtod(value.c_str(), &end);
+    char range[96];
+    std::snprintf(range, sizeof(range),
+                  k->integer ? "an integer in [%.0f, %.0f]" : "a number in [%g, %g]", k->lo, k->hi);
+    if (end == value.c_str() || *end != '\0' || !std::isfinite(v) || v < k->lo || v > k->hi ||
+        (k->integer && v != std::floor(v))) {
+      *error = "motion: " + key + " needs " + range + ", got '" + value + "'";
+      return false;
+    }
+    if (k->integer) {
+      *k->whole = static_cast<int>(v);
+    } else {
+      *k->real = v;
     }
   }
   if (weak_residual_m > strong_residual_m) {

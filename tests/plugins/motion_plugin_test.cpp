@@ -125,6 +125,22 @@ TEST(MotionOptionsTest, ParsesAndRejects) {
   EXPECT_NE(e.find("unknown key 'min_aera_px'"), std::string::npos) << e;
   EXPECT_FALSE(o.parse("min_area_px=abc", &e));
   EXPECT_FALSE(o.parse("weak_residual_m=0.5", &e));
+  // Values that would turn a rule off or wrap (min_area_px=1e12 became a negative area and
+  // disabled the size filter): each refused, naming the key and its range.
+  const std::pair<const char*, const char*> bad[] = {
+      {"min_area_px=1e12", "min_area_px needs an integer in [1, 307200], got '1e12'"},
+      {"min_consecutive=1e10", "min_consecutive needs an integer in [1, 100]"},
+      {"min_consecutive=2.5", "min_consecutive needs an integer"},
+      {"persist_iou=5", "persist_iou needs a number in [0, 1], got '5'"},
+      {"max_association=7", "max_association needs a number in [0, 1]"},
+      {"max_area_fraction=1.5", "max_area_fraction needs a number in [0, 1]"},
+      {"open_radius_px=1e6", "open_radius_px needs an integer in [0, 32]"},
+      {"min_area_px=5,min_area_px=7", "min_area_px is given twice"}};
+  for (const auto& [config, expected] : bad) {
+    MotionOptions fresh;
+    EXPECT_FALSE(fresh.parse(config, &e)) << config;
+    EXPECT_NE(e.find(expected), std::string::npos) << config << " -> " << e;
+  }
 }
 
 TEST(MotionPlugin, ThroughTheHost) {
