@@ -221,11 +221,17 @@ Openni2Source::Openni2Source(const std::string& uri, const io::SourceOptions& op
   m.uri = target;
   if (m.device.open(target.c_str()) != openni::STATUS_OK) {
     const bool virtual_device = target.rfind("emf-virtual://", 0) == 0;
-    throw IoError("openni2: cannot open device '" + target + "' (" + extendedError() + "): " +
-                  (virtual_device ? std::string("fix the folder as the message says")
-                                  : std::string("check that it is plugged in and not used by "
-                                                "another program")) +
-                  "; `emf devices` lists what OpenNI2 sees");
+    const std::string driver = openni2DriverFolder() + "/libEmfVirtualDevice.so.0";
+    std::string advice = "check that it is plugged in and not used by another program";
+    if (virtual_device) {
+      std::error_code ec;
+      advice = std::filesystem::exists(driver, ec)
+                   ? "fix the folder as the message says"
+                   : "the emf virtual driver is not in " + openni2DriverFolder() +
+                         ", where the libOpenNI2 this program loaded looks for drivers";
+    }
+    throw IoError("openni2: cannot open device '" + target + "' (" + extendedError() +
+                  "): " + advice + "; `emf devices` lists what OpenNI2 sees");
   }
   live_ = !m.device.isFile();
   if (!live_) {

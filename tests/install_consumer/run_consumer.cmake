@@ -73,3 +73,18 @@ if(NOT rc EQUAL 0 OR NOT err MATCHES "loaded from ${prefix}/lib/emf/plugins/libe
   message(FATAL_ERROR "FAILED: installed library's plugin lookup (exit ${rc}):\n${out}\n${err}")
 endif()
 message("plugins(installed): found in ${prefix}/lib/emf/plugins")
+
+# The virtual OpenNI2 device from the prefix: the installed emf loads the installation's OpenNI2
+# runtime folder (<libdir>/emf/openni2) through its RPATH. (The driver was installed where the
+# system's libOpenNI2 never looks.)
+if(EXISTS ${prefix}/lib/emf/openni2/OpenNI2/Drivers/libEmfVirtualDevice.so.0)
+  run(${prefix}/bin/emf synth room --out ${WORK_DIR}/room --frames 2 --width 64 --height 48)
+  execute_process(COMMAND ${prefix}/bin/emf run --quiet
+                          --source "openni2:emf-virtual://${WORK_DIR}/room;speed=0"
+                          --set map.memory_mb=16 --out ${WORK_DIR}/run-virtual
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0 OR NOT out MATCHES "emf run: 2 frames")
+    message(FATAL_ERROR "FAILED: installed emf on the virtual OpenNI2 device (exit ${rc}):\n${out}\n${err}")
+  endif()
+  message("openni2(installed): virtual device ran 2 frames")
+endif()
