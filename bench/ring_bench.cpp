@@ -105,9 +105,14 @@ void twoThreads(RingPolicy policy, int64_t n, const emf::io::Frame& frame) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const int64_t n = argc > 1 ? std::atoll(argv[1]) : 20000;
-  if (n <= 0) {
-    std::fprintf(stderr, "usage: ring_bench [frames > 0]\n");
+  int64_t n = 20000;
+  if (argc > 1) {
+    char* end = nullptr;
+    n = std::strtoll(argv[1], &end, 10);
+    if (*end != '\0') n = 0;
+  }
+  if (argc > 2 || n <= 0 || n > 100000000) {
+    std::fprintf(stderr, "usage: ring_bench [frames: an integer in [1, 100000000]]\n");
     return 2;
   }
   emf::io::Frame frame;

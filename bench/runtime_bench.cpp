@@ -142,6 +142,7 @@ void runOne(int width, int height, double seconds, const std::string& policy) {
     processing_ms.push_back(r.processing_ms);
   };
   emf::runtime::Runtime rt(std::move(paced), processor, config.runtime, callback);
+  const int64_t start_ns = emf::runtime::steadyNowNs();
   rt.start();
   // The sensor runs for `seconds`; then the runtime is stopped (the frame being processed
   // completes, frames still in the ring are discarded as on a live stop).
@@ -155,6 +156,8 @@ void runOne(int width, int height, double seconds, const std::string& policy) {
     }
   }
   rt.stop();
+  // The rate over the time it really ran (the last poll may overshoot `seconds` by 0.1 s).
+  const double ran_s = static_cast<double>(emf::runtime::steadyNowNs() - start_ns) * 1e-9;
   const emf::runtime::RuntimeCounters c = rt.counters();
   std::lock_guard<std::mutex> lock(m);
   const double drop_pct =
@@ -164,7 +167,7 @@ void runOne(int width, int height, double seconds, const std::string& policy) {
       "(%.1f%%), "
       "lost %d\n",
       width, height, policy.c_str(), kSensorHz, seconds, static_cast<long long>(c.produced),
-      static_cast<long long>(c.processed), static_cast<double>(c.processed) / seconds,
+      static_cast<long long>(c.processed), static_cast<double>(c.processed) / ran_s,
       static_cast<long long>(c.dropped), drop_pct, lost);
   std::printf("  latency sensor->result: median %.1f ms, p99 %.1f ms\n",
               percentile(sensor_latency_ms, 0.5), percentile(sensor_latency_ms, 0.99));
@@ -189,16 +192,24 @@ void runOne(int width, int height, double seconds, const std::string& policy) {
 int main(int argc, char** argv) {
   try {
     emf::setLogLevel(emf::LogLevel::kWarning);
-    const double seconds = argc > 1 ? std::atof(argv[1]) : 10.0;
+    double seconds = 10.0;
+    if (argc > 1) {
+      char* end = nullptr;
+      seconds = std::strtod(argv[1], &end);
+      if (*end != '\0') seconds = -1;
+    }
     const std::string policy = argc > 2 ? argv[2] : "drop_oldest";
-    if (!(seconds > 0)) {
+    if (!(seconds >= 0.1 && seconds <= 3600)) {
+      std::fprintf(stderr, "runtime_bench: seconds must be a number in [0.1, 3600]\n");
       std::fprintf(stderr, "usage: runtime_bench [seconds=10] [policy=drop_oldest] [WxH ...]\n");
       return 2;
     }
     std::vector<std::pair<int, int>> sizes;
     for (int i = 3; i < argc; ++i) {
       int w = 0, h = 0;
-      if (std::sscanf(argv[i], "%dx%d", &w, &h) != 2 || w <= 0 || h <= 0) {
+      char rest = 0;
+      if (std::sscanf(argv[i], "%dx%d%c", &w, &h, &rest) != 2 || w <= 0 || h <= 0 || w > 4096 ||
+          h > 4096) {
         std::fprintf(stderr, "runtime_bench: size '%s' is not WxH\n", argv[i]);
         return 2;
       }
