@@ -10,6 +10,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -150,18 +151,19 @@ emf_status detect(emf_detector* det, const emf_detector_frame* frame, emf_detect
     auto r = std::make_unique<Result>();
     std::string line;
     int line_no = 0;
-    std::map<int, int> id_lines;  // detection id -> line, to refuse an id listed twice
+    std::map<long, int> id_lines;  // detection id -> line, to refuse an id listed twice
     while (std::getline(txt, line)) {
       ++line_no;
       const std::vector<std::string> fields = tableFields(line);
       if (fields.empty()) continue;
       const std::string where = "maskfile: " + base + ".txt:" + std::to_string(line_no) + ": ";
-      int id = 0;
-      float score = 0;
-      char end = 0;
-      if (fields.size() != 3 || std::sscanf(fields[0].c_str(), "%d%c", &id, &end) != 1 ||
-          std::sscanf(fields[2].c_str(), "%f%c", &score, &end) != 1 || id <= 0 || id > 65535 ||
-          !std::isfinite(score) || score < 0.0f || score > 1.0f) {
+      // strtol / strtod: no undefined behaviour on out-of-range text (sscanf's %d has it).
+      char* id_end = nullptr;
+      char* score_end = nullptr;
+      const long id = fields.size() == 3 ? std::strtol(fields[0].c_str(), &id_end, 10) : 0;
+      const double score = fields.size() == 3 ? std::strtod(fields[2].c_str(), &score_end) : -1;
+      if (fields.size() != 3 || *id_end != '\0' || *score_end != '\0' || id <= 0 || id > 65535 ||
+          !std::isfinite(score) || score < 0.0 || score > 1.0) {
         setError(error, error_size,
                  where +
                      "expected `det_id class_name score` (id 1..65535, score in [0, 1]), got '" +
@@ -194,7 +196,7 @@ emf_status detect(emf_detector* det, const emf_detector_frame* frame, emf_detect
       r->masks.push_back(std::move(mask));
       emf_detection d{};
       d.struct_size = sizeof(d);
-      d.score = score;
+      d.score = static_cast<float>(score);
       d.box_x = x0;
       d.box_y = y0;
       d.box_width = x1 - x0 + 1;
