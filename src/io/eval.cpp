@@ -264,7 +264,10 @@ std::vector<ObjectEval> evaluateObjects(const std::vector<std::pair<int, Traject
                     "no estimated object covers %.0f%% of its %zu timestamps (best %.1f%%)",
                     options.min_object_coverage * 100, gt.size(), best_coverage[g] * 100);
     }
-    o.eval.note = estimates.empty() ? "no estimated objects" : text;
+    o.eval.note = gt.empty()          ? "the ground truth has no poses (the object is never "
+                                        "in view in these frames); nothing to match"
+                  : estimates.empty() ? "no estimated objects"
+                                      : text;
   }
   return out;
 }

@@ -293,6 +293,12 @@ TEST(Eval, OneEstimatePerGroundTruthObject) {
   EXPECT_NE(alone[1].eval.note.find("fits another ground-truth object better"), std::string::npos)
       << alone[1].eval.note;
   EXPECT_EQ(alone[1].eval.coverage, 0.0);  // no estimate left for it covers anything
+  // A ground-truth object never in view has an empty trajectory: said so, not "covers 30% of
+  // its 0 timestamps".
+  const std::vector<ObjectEval> unseen = evaluateObjects({{5, Trajectory()}}, {{4, copy_a}}, {});
+  EXPECT_FALSE(unseen[0].est_id.has_value());
+  EXPECT_NE(unseen[0].eval.note.find("the ground truth has no poses"), std::string::npos)
+      << unseen[0].eval.note;
 }
 
 TEST(Eval, TwoPosesGiveAnAteAsTheTumToolDoes) {
