@@ -10,16 +10,21 @@
 //             raycast_p90_ms=.. blocks=.. bytes_per_voxel=.. pool_mb=.. surface_err_mm=..
 // integrate_ms = allocation + integration of one frame (medians unless marked p90; wall time
 // with the queue drained); upload of the depth image is reported separately.
+#include <malloc.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -27,11 +32,13 @@
 #include "common/error.h"
 #include "common/log.h"
 #include "io/frame_source.h"
+#include "io/ply.h"
 #include "map/device_image.h"
 #include "map/mesh.h"
 #include "map/mesh_distance.h"
 #include "map/raycaster.h"
 #include "map/volume.h"
+#include "map/volume_host_access.h"
 #include "map/voxel_pool.h"
 
 namespace {
@@ -116,7 +123,9 @@ struct Result {
   int blocks = 0, frames = 0;
   double bytes_per_voxel = 0, pool_used_mb = 0, pool_mb = 0, index_mb = 0;
   int64_t dropped = 0;
-  double surface_err_mm = 0, surface_coverage = 0, mesh_s = 0;
+  double surface_err_mm = 0, surface_coverage = 0, mesh_s = 0, mesh_mb = 0;
+  double copy_mesh_s = 0, copy_mesh_mb = 0;
+  bool mesh_mapped = false;
   size_t mesh_triangles = 0, error_points = 0;
   int raycast_valid_pct = 0;
   int object_blocks = 0;
@@ -143,6 +152,26 @@ double cpuMs() {
   return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
 }
 
+/// A field of /proc/self/status in MiB (VmRSS: resident now; VmHWM: peak since start or since
+/// resetPeakRss()), or -1 when it cannot be read.
+double procStatusMb(const char* field) {
+  std::ifstream in("/proc/self/status");
+  std::string line;
+  const std::string key = std::string(field) + ":";
+  while (std::getline(in, line)) {
+    if (line.compare(0, key.size(), key) == 0) return std::atof(line.c_str() + key.size()) / 1024.0;
+  }
+  return -1;
+}
+
+/// Resets VmHWM to the current RSS (Linux >= 4.0: "5" to /proc/self/clear_refs).
+bool resetPeakRss() {
+  std::ofstream out("/proc/self/clear_refs");
+  out << "5";
+  out.flush();
+  return static_cast<bool>(out);
+}
+
 std::string loadAverage() {
   std::ifstream in("/proc/loadavg");
   std::string a, b, c;
@@ -151,7 +180,7 @@ std::string loadAverage() {
 }
 
 Result run(emf::cl::Context& ctx, const BenchSequence& seq, const Config& cfg, int memory_mb,
-           int error_every, int error_stride, const std::string& mesh_dir) {
+           int error_every, int error_stride, const std::string& ply_dir) {
   Result r;
   r.config = cfg;
   emf::map::MapOptions o;
@@ -270,17 +299,46 @@ Result run(emf::cl::Context& ctx, const BenchSequence& seq, const Config& cfg, i
                                    : 0;
   }
 
-  // Mesh and reconstruction error.
-  const auto m0 = Clock::now();
-  const emf::map::VolumeHostData host = vol.download();
-  const emf::map::Mesh mesh = emf::map::extractMesh(host);
-  r.mesh_s = ms(m0, Clock::now()) / 1000;
+  // The mesh written to a PLY file two ways, one after the other, each measured by its time and
+  // the resident memory it adds (peak RSS during it, reset right before, minus the RSS before;
+  // freed heap returned to the system in between):
+  //  - stream (what emf run and emf_system_save_mesh do): the volume mapped on a host-unified
+  //    device (downloaded otherwise), the mesh streamed into the file one block layer at a time;
+  //  - copy (the reference: emf before streaming): the volume downloaded, the mesh built in
+  //    memory, then written. Its mesh is kept for the reconstruction error below.
+  char name[128];
+  std::snprintf(name, sizeof(name), "/map_bench_%dx%d_%gcm", cfg.width, cfg.height,
+                cfg.voxel_m * 100);
+  const std::string ply_base = ply_dir + name;
+  auto measure = [&](double* seconds, double* mb, const auto& work) {
+    malloc_trim(0);
+    const bool peak_reset = resetPeakRss();
+    const double rss_before_mb = procStatusMb("VmRSS");
+    const auto t0 = Clock::now();
+    work();
+    *seconds = ms(t0, Clock::now()) / 1000;
+    *mb = peak_reset && rss_before_mb >= 0 ? procStatusMb("VmHWM") - rss_before_mb : -1;
+  };
+  size_t streamed_triangles = 0;
+  measure(&r.mesh_s, &r.mesh_mb, [&]() {
+    const emf::map::VolumeHostAccess access(vol);
+    r.mesh_mapped = access.mapped();
+    emf::io::PlyWriter ply(ply_base + ".ply", true);
+    emf::map::extractMesh(access.view(), access.T_world_volume(), emf::map::MeshOptions(), ply);
+    ply.commit();
+    streamed_triangles = ply.triangleCount();
+  });
+  emf::map::Mesh mesh;
+  measure(&r.copy_mesh_s, &r.copy_mesh_mb, [&]() {
+    const emf::map::VolumeHostAccess access = emf::map::VolumeHostAccess::downloaded(vol);
+    mesh = emf::map::extractMesh(access.view(), access.T_world_volume());
+    emf::io::writePly(ply_base + "_copy.ply", mesh, true);
+  });
   r.mesh_triangles = mesh.triangles.size();
-  if (!mesh_dir.empty()) {
-    char name[128];
-    std::snprintf(name, sizeof(name), "/map_bench_%dx%d_%gcm.ply", cfg.width, cfg.height,
-                  cfg.voxel_m * 100);
-    emf::map::writePly(mesh_dir + name, mesh, true);
+  if (streamed_triangles != mesh.triangles.size()) {
+    throw std::runtime_error("streamed mesh has " + std::to_string(streamed_triangles) +
+                             " triangles, the in-memory one " +
+                             std::to_string(mesh.triangles.size()));
   }
   constexpr float kMaxDistM = 0.1f;
   const emf::map::MeshDistance md(mesh, 0.02f);
@@ -390,26 +448,43 @@ int main(int argc, char** argv) {
     std::printf("map_bench: %s, %zu frames; device %s; load average before: %s\n", data.c_str(),
                 seq.frames.size(), ctx.device().describe().c_str(), loadAverage().c_str());
     std::vector<Result> results;
+    // The PLY files go to --mesh-dir, else to a temporary folder removed at the end.
+    const bool temp_ply_dir = mesh_dir.empty();
+    const std::string ply_dir = temp_ply_dir
+                                    ? (std::filesystem::temp_directory_path() /
+                                       ("map_bench-" + std::to_string(static_cast<long>(getpid()))))
+                                          .string()
+                                    : mesh_dir;
+    std::filesystem::create_directories(ply_dir);
+    struct RemoveTemp {
+      bool active;
+      std::string dir;
+      ~RemoveTemp() {
+        std::error_code ec;
+        if (active) std::filesystem::remove_all(dir, ec);
+      }
+    } remove_temp{temp_ply_dir, ply_dir};
     for (const Config& c : cfgs) {
-      results.push_back(run(ctx, seq, c, memory_mb, error_every, error_stride, mesh_dir));
+      results.push_back(run(ctx, seq, c, memory_mb, error_every, error_stride, ply_dir));
     }
     std::printf("load average after: %s\n\n", loadAverage().c_str());
     std::printf(
         "%-9s %6s | %8s %8s %8s %8s %7s | %8s %8s %8s %5s | %7s %7s %7s %6s %6s | %8s %6s %9s "
-        "%6s\n",
+        "%6s %7s %6s %7s\n",
         "res", "voxel", "integ", "int_p90", "int_cpu", "alloc", "upload", "raycast", "rc_p90",
         "rc_cpu", "rc_px", "blocks", "used_MB", "pool_MB", "idx_MB", "B/vox", "err_mm", "cover",
-        "triangles", "mesh_s");
+        "triangles", "mesh_s", "mesh_MB", "copy_s", "copy_MB");
     for (const Result& r : results) {
       char res[32];
       std::snprintf(res, sizeof(res), "%dx%d", r.config.width, r.config.height);
       std::printf(
           "%-9s %5.0fcm | %8.2f %8.2f %8.2f %8.2f %7.2f | %8.2f %8.2f %8.2f %4d%% | %7d %7.1f "
-          "%7.0f %6.2f %6.2f | %8.2f %5.1f%% %9zu %6.1f\n",
+          "%7.0f %6.2f %6.2f | %8.2f %5.1f%% %9zu %6.2f %7.1f %6.2f %7.1f\n",
           res, r.config.voxel_m * 100, r.integrate_ms, r.integrate_p90_ms, r.integrate_cpu_ms,
           r.alloc_ms, r.upload_ms, r.raycast_ms, r.raycast_p90_ms, r.raycast_cpu_ms,
           r.raycast_valid_pct, r.blocks, r.pool_used_mb, r.pool_mb, r.index_mb, r.bytes_per_voxel,
-          r.surface_err_mm, 100 * r.surface_coverage, r.mesh_triangles, r.mesh_s);
+          r.surface_err_mm, 100 * r.surface_coverage, r.mesh_triangles, r.mesh_s, r.mesh_mb,
+          r.copy_mesh_s, r.copy_mesh_mb);
       if (r.dropped > 0) {
         std::printf("  ^ pool exhausted: %lld block allocations dropped\n",
                     static_cast<long long>(r.dropped));
@@ -422,8 +497,13 @@ int main(int argc, char** argv) {
         "same pose (rc_cpu: CPU time); rc_px = pixels with "
         "a surface (last frame); B/vox = (used slots + index grid) / allocated voxels;\n"
         "err_mm = mean distance of ground-truth depth points (every %d-th frame, every %d-th "
-        "pixel) to the mesh, over the cover share within 10 cm.\n",
-        error_every, error_stride);
+        "pixel) to the mesh, over the cover share within 10 cm;\nmesh_s / mesh_MB = time and "
+        "resident memory (peak RSS during it minus RSS before) of writing the mesh as PLY the "
+        "way emf does:\nvolume mapped (%s), mesh streamed into the file; copy_s / copy_MB: "
+        "the reference, volume downloaded, mesh built\nin memory, then written.\n",
+        error_every, error_stride,
+        results.empty() || results[0].mesh_mapped ? "host-unified memory: no copy"
+                                                  : "not host-unified: downloaded");
     for (const Result& r : results) {
       std::printf(
           "object volume %dx%d @ %gcm: %d blocks, %.2f bytes per voxel (TSDF + Fg/Bg "
@@ -436,10 +516,10 @@ int main(int argc, char** argv) {
       std::printf(
           "map_bench res=%dx%d voxel_m=%g integrate_ms=%.2f integrate_p90_ms=%.2f "
           "raycast_ms=%.2f raycast_p90_ms=%.2f blocks=%d bytes_per_voxel=%.2f pool_mb=%.1f "
-          "surface_err_mm=%.2f\n",
+          "surface_err_mm=%.2f mesh_s=%.2f mesh_mb=%.1f copy_mesh_s=%.2f copy_mesh_mb=%.1f\n",
           r.config.width, r.config.height, r.config.voxel_m, r.integrate_ms, r.integrate_p90_ms,
           r.raycast_ms, r.raycast_p90_ms, r.blocks, r.bytes_per_voxel, r.pool_used_mb,
-          r.surface_err_mm);
+          r.surface_err_mm, r.mesh_s, r.mesh_mb, r.copy_mesh_s, r.copy_mesh_mb);
     }
     return 0;
   } catch (const std::exception& e) {

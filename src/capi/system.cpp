@@ -14,7 +14,9 @@
 #include "capi/system_impl.h"
 #include "common/error.h"
 #include "emf/emf.h"
+#include "io/ply.h"
 #include "map/mesh.h"
+#include "map/volume_host_access.h"
 
 namespace emf::capi {
 namespace {
@@ -136,25 +138,56 @@ void requireSlam(const emf_system& system, const char* function) {
   }
 }
 
-/// Frees a mesh block: the struct handed out plus the arrays it points to (POD, so the
-/// emf_mesh* the caller holds converts back to the block).
+/// The arrays of a mesh handed out, filled straight from the extraction (a MeshSink): the mesh
+/// exists once, in the caller's layout.
+struct MeshArrays : public map::MeshSink {
+  std::vector<float> positions, normals;
+  std::vector<uint32_t> indices;
+
+  void addVertices(const Eigen::Vector3f* p, const Eigen::Vector3f* n, size_t count) override {
+    for (size_t i = 0; i < count; ++i) {
+      positions.insert(positions.end(), p[i].data(), p[i].data() + 3);
+      normals.insert(normals.end(), n[i].data(), n[i].data() + 3);
+    }
+  }
+  void addTriangles(const Eigen::Vector3i* t, size_t count) override {
+    for (size_t i = 0; i < count; ++i) {
+      for (int c = 0; c < 3; ++c) indices.push_back(static_cast<uint32_t>(t[i][c]));
+    }
+  }
+};
+
+/// A mesh handed out: the struct the caller holds, first, and its arrays (POD, so the emf_mesh*
+/// converts back to the block).
 struct MeshBlock {
   emf_mesh mesh;
-  float* positions;
-  float* normals;
-  uint32_t* indices;
+  MeshArrays* arrays;
 };
 static_assert(std::is_standard_layout<MeshBlock>::value, "emf_mesh* must convert to MeshBlock*");
 
-map::Mesh extract(const emf_system& system, int32_t volume_id, const char* function) {
+const map::Volume& volumeOf(const emf_system& system, int32_t volume_id, const char* function) {
   requireSlam(system, function);
   const map::Volume* volume = system.slam->volume(volume_id);
   if (!volume) {
-    (void)function;
     throw NotFoundError("no volume with id " + std::to_string(volume_id) +
                         " (0 = background; object ids come from emf_system_get_objects)");
   }
-  return map::extractMesh(volume->download());
+  return *volume;
+}
+
+void extract(const emf_system& system, int32_t volume_id, const char* function,
+             map::MeshSink& sink) {
+  const map::VolumeHostAccess access(volumeOf(system, volume_id, function));
+  map::extractMesh(access.view(), access.T_world_volume(), map::MeshOptions(), sink);
+}
+
+/// Streamed into the file: the mesh is never held in memory as a whole.
+void saveMesh(const emf_system& system, int32_t volume_id, const std::string& path,
+              const char* function) {
+  const map::VolumeHostAccess access(volumeOf(system, volume_id, function));
+  io::PlyWriter ply(path, true);
+  map::extractMesh(access.view(), access.T_world_volume(), map::MeshOptions(), ply);
+  ply.commit();
 }
 
 }  // namespace
@@ -461,31 +494,24 @@ EMF_API emf_status emf_system_extract_mesh(emf_system* system, int32_t volume_id
     *out = nullptr;
     if (!system) return fail(EMF_ERROR_INVALID_ARGUMENT, std::string(fn) + ": system is NULL");
     emf::capi::requireIdle(*system, fn);
-    const emf::map::Mesh mesh = emf::capi::extract(*system, volume_id, fn);
+    auto arrays = std::make_unique<emf::capi::MeshArrays>();
+    emf::capi::extract(*system, volume_id, fn, *arrays);
+    const size_t nv = arrays->positions.size() / 3, nt = arrays->indices.size() / 3;
+    if (nv > static_cast<size_t>(std::numeric_limits<int32_t>::max()) ||
+        nt > static_cast<size_t>(std::numeric_limits<int32_t>::max())) {
+      throw emf::ResourceError("the mesh has " + std::to_string(nt) +
+                               " triangles, more than emf_mesh counts (int32)");
+    }
+    for (auto* v : {&arrays->positions, &arrays->normals}) v->reserve(1);  // never NULL
+    arrays->indices.reserve(1);
     auto block = std::make_unique<emf::capi::MeshBlock>();
-    std::memset(block.get(), 0, sizeof(emf::capi::MeshBlock));
-    const size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
-    std::unique_ptr<float[]> positions(new float[3 * nv + 1]);
-    std::unique_ptr<float[]> normals(new float[3 * nv + 1]);
-    std::unique_ptr<uint32_t[]> indices(new uint32_t[3 * nt + 1]);
-    for (size_t i = 0; i < nv; ++i) {
-      for (int c = 0; c < 3; ++c) {
-        positions[3 * i + c] = mesh.vertices[i][c];
-        normals[3 * i + c] = mesh.normals[i][c];
-      }
-    }
-    for (size_t i = 0; i < nt; ++i) {
-      for (int c = 0; c < 3; ++c) indices[3 * i + c] = static_cast<uint32_t>(mesh.triangles[i][c]);
-    }
-    block->positions = positions.release();
-    block->normals = normals.release();
-    block->indices = indices.release();
     block->mesh.struct_size = sizeof(emf_mesh);
     block->mesh.vertex_count = static_cast<int32_t>(nv);
-    block->mesh.positions = block->positions;
-    block->mesh.normals = block->normals;
+    block->mesh.positions = arrays->positions.data();
+    block->mesh.normals = arrays->normals.data();
     block->mesh.triangle_count = static_cast<int32_t>(nt);
-    block->mesh.indices = block->indices;
+    block->mesh.indices = arrays->indices.data();
+    block->arrays = arrays.release();
     *out = &block.release()->mesh;
     return EMF_OK;
   });
@@ -494,9 +520,7 @@ EMF_API emf_status emf_system_extract_mesh(emf_system* system, int32_t volume_id
 EMF_API void emf_mesh_destroy(emf_mesh* mesh) {
   if (!mesh) return;
   auto* block = reinterpret_cast<emf::capi::MeshBlock*>(mesh);
-  delete[] block->positions;
-  delete[] block->normals;
-  delete[] block->indices;
+  delete block->arrays;
   delete block;
 }
 
@@ -508,7 +532,7 @@ EMF_API emf_status emf_system_save_mesh(emf_system* system, int32_t volume_id, c
       return fail(EMF_ERROR_INVALID_ARGUMENT, std::string(fn) + ": path is NULL or empty");
     }
     emf::capi::requireIdle(*system, fn);
-    emf::map::writePly(path, emf::capi::extract(*system, volume_id, fn), true);
+    emf::capi::saveMesh(*system, volume_id, path, fn);
     return EMF_OK;
   });
 }

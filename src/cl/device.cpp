@@ -90,6 +90,7 @@ std::vector<DeviceInfo> listDevices() {
       info.global_mem_bytes = deviceValue<cl_ulong>(d, CL_DEVICE_GLOBAL_MEM_SIZE);
       info.max_alloc_bytes = deviceValue<cl_ulong>(d, CL_DEVICE_MAX_MEM_ALLOC_SIZE);
       info.max_work_group_size = deviceValue<size_t>(d, CL_DEVICE_MAX_WORK_GROUP_SIZE);
+      info.host_unified_memory = deviceValue<cl_bool>(d, CL_DEVICE_HOST_UNIFIED_MEMORY) == CL_TRUE;
       info.is_pocl = contains(info.platform_name, "portable computing language") ||
                      contains(info.platform_name, "pocl");
       out.push_back(info);

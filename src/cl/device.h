@@ -25,6 +25,9 @@ struct DeviceInfo {
   uint64_t max_alloc_bytes = 0;
   size_t max_work_group_size = 0;
   bool is_pocl = false;
+  /// CL_DEVICE_HOST_UNIFIED_MEMORY: the device's memory is the host's (CPU devices, most
+  /// integrated GPUs), so mapping a buffer for reading need not copy it.
+  bool host_unified_memory = false;
 
   /// "PoCL CPU: pthread-skylake... (OpenCL 1.2 ...)".
   std::string describe() const;

@@ -1,15 +1,10 @@
 #include "map/mesh.h"
 
-#include <unistd.h>
-
+#include <algorithm>
 #include <array>
-#include <atomic>
 #include <cmath>
-#include <cstdio>
-#include <cstring>
-#include <filesystem>
-#include <fstream>
-#include <sstream>
+#include <limits>
+#include <stdexcept>
 #include <unordered_map>
 
 #include "common/error.h"
@@ -130,288 +125,256 @@ int cubeLoops(const float f[8], int loops[4][12], int lengths[4], bool simple[4]
   return count;
 }
 
-struct VertexKey {
-  int64_t operator()(const Eigen::Vector3i& v, int axis, const Eigen::Vector3i& n) const {
-    return ((static_cast<int64_t>(v.z()) * n.y() + v.y()) * n.x() + v.x()) * 3 + axis;
-  }
-};
+/// Streams the mesh of a volume to a MeshSink one z-layer of blocks at a time.
+///
+/// Vertices sit on cube edges; edge (v, axis) from voxel v is keyed by v (z-major, so keys order
+/// by z) and the axis, a loop's centre vertex by its cube and loop. A cube at voxel v0 touches
+/// only edges whose lower voxel has z >= v0.z, so once the walk (in block order: z-layers of
+/// blocks ascending) reaches a layer starting at voxel z0, every vertex with z < z0 is final:
+/// its normal is computed and it is handed to the sink with its output index. Triangles wait
+/// until their three vertices are final (at most one layer). Memory: the vertices of about two
+/// block layers, not the whole mesh.
+class MeshStreamer {
+ public:
+  MeshStreamer(const VolumeHostView& view, const Eigen::Isometry3d& T_world_volume,
+               const MeshOptions& options, MeshSink& sink)
+      : view_(view),
+        options_(options),
+        sink_(sink),
+        stride_x_(view.dims_blocks.x() * kBlockSize + 1),
+        stride_y_(view.dims_blocks.y() * kBlockSize + 1),
+        R_(T_world_volume.rotation().cast<float>()),
+        t_(T_world_volume.translation().cast<float>()) {}
 
-}  // namespace
-
-Mesh extractMesh(const VolumeHostData& vol, const MeshOptions& options) {
-  const CubeTopology& topo = topology();
-  const VolumeHostView view = vol.view();
-  const Eigen::Vector3i dims_voxels = vol.dims_blocks * kBlockSize;
-  const float vs = vol.voxel_size_m;
-  const int min_weight_q = static_cast<int>(std::ceil(options.min_weight * kWeightScale));
-  Mesh mesh;
-  std::unordered_map<int64_t, int> vertex_of_edge;
-  std::vector<Eigen::Vector3f> face_normal_sum;
-
-  auto corner = [&](const Eigen::Vector3i& v, float* psi) {
-    const int64_t i = view.voxelIndex(v);
-    if (i < 0) return false;
-    const Voxel& vox = vol.voxels[static_cast<size_t>(i)];
-    if (vox.weight_q <= 0 || vox.weight_q < min_weight_q) return false;
-    *psi = vox.tsdf();
-    return true;
-  };
-
-  for (size_t lin = 0; lin < vol.index.size(); ++lin) {
-    if (vol.index[lin] < 0) continue;
-    const Eigen::Vector3i base = blockCoords(vol.dims_blocks, static_cast<int>(lin)) * kBlockSize;
-    for (int lz = 0; lz < kBlockSize; ++lz) {
-      for (int ly = 0; ly < kBlockSize; ++ly) {
-        for (int lx = 0; lx < kBlockSize; ++lx) {
-          const Eigen::Vector3i v0 = base + Eigen::Vector3i(lx, ly, lz);
-          float f[8];
-          bool ok = true;
-          int inside = 0;
-          for (int n = 0; n < 8 && ok; ++n) {
-            ok = corner(v0 + Eigen::Vector3i(n & 1, (n >> 1) & 1, (n >> 2) & 1), &f[n]);
-            if (ok && f[n] < 0.0f) inside |= 1 << n;
-          }
-          if (!ok || inside == 0 || inside == 255) continue;
-          if (options.skip_truncated_crossings) {
-            bool truncated = false;
-            for (const auto& e : topo.edge) {
-              const float a = f[e[0]], b = f[e[1]];
-              if ((a < 0.0f) != (b < 0.0f) && std::fabs(a) >= 0.999f && std::fabs(b) >= 0.999f) {
-                truncated = true;
-              }
+  void run() {
+    const CubeTopology& topo = topology();
+    const Eigen::Vector3i dims = view_.dims_blocks;
+    const int64_t blocks = static_cast<int64_t>(dims.x()) * dims.y() * dims.z();
+    const int64_t layer_blocks = static_cast<int64_t>(dims.x()) * dims.y();
+    const float vs = view_.voxel_size_m;
+    int current_layer = -1;
+    for (int64_t lin = 0; lin < blocks; ++lin) {
+      if (view_.index[lin] < 0) continue;
+      const int layer = static_cast<int>(lin / layer_blocks);
+      if (layer != current_layer) {
+        finalizeBelow(static_cast<int64_t>(layer) * kBlockSize * stride_y_ * stride_x_ * 8);
+        current_layer = layer;
+      }
+      const Eigen::Vector3i base = blockCoords(dims, static_cast<int>(lin)) * kBlockSize;
+      for (int lz = 0; lz < kBlockSize; ++lz) {
+        for (int ly = 0; ly < kBlockSize; ++ly) {
+          for (int lx = 0; lx < kBlockSize; ++lx) {
+            const Eigen::Vector3i v0 = base + Eigen::Vector3i(lx, ly, lz);
+            float f[8];
+            bool ok = true;
+            int inside = 0;
+            for (int n = 0; n < 8 && ok; ++n) {
+              ok = corner(v0 + Eigen::Vector3i(n & 1, (n >> 1) & 1, (n >> 2) & 1), &f[n]);
+              if (ok && f[n] < 0.0f) inside |= 1 << n;
             }
-            if (truncated) continue;
-          }
-          if (options.foreground_only && view.count_index &&
-              samplePfgReference(view, (v0.cast<float>() + Eigen::Vector3f::Ones()) * vs) <= 0.5f) {
-            continue;
-          }
-          int loops[4][12];
-          int lengths[4];
-          bool simple[4];
-          const int nloops = cubeLoops(f, loops, lengths, simple);
-          for (int l = 0; l < nloops; ++l) {
-            int ids[12];
-            for (int k = 0; k < lengths[l]; ++k) {
-              const int e = loops[l][k];
-              const int c0 = topo.edge[e][0], c1 = topo.edge[e][1];
-              const Eigen::Vector3i vlow =
-                  v0 + Eigen::Vector3i(c0 & 1, (c0 >> 1) & 1, (c0 >> 2) & 1);
-              const int axis = topo.edge_axis[e];
-              const int64_t key = VertexKey()(vlow, axis, dims_voxels);
-              auto it = vertex_of_edge.find(key);
-              if (it == vertex_of_edge.end()) {
-                const float t = f[c0] / (f[c0] - f[c1]);
-                Eigen::Vector3f p = vlow.cast<float>() + Eigen::Vector3f::Constant(0.5f);
-                p[axis] += t;
-                it = vertex_of_edge.emplace(key, static_cast<int>(mesh.vertices.size())).first;
-                mesh.vertices.push_back(p * vs);
-                face_normal_sum.push_back(Eigen::Vector3f::Zero());
+            if (!ok || inside == 0 || inside == 255) continue;
+            if (options_.skip_truncated_crossings) {
+              bool truncated = false;
+              for (const auto& e : topo.edge) {
+                const float a = f[e[0]], b = f[e[1]];
+                if ((a < 0.0f) != (b < 0.0f) && std::fabs(a) >= 0.999f && std::fabs(b) >= 0.999f) {
+                  truncated = true;
+                }
               }
-              ids[k] = it->second;
+              if (truncated) continue;
             }
-            auto add_triangle = [&](const Eigen::Vector3i& tri) {
-              mesh.triangles.push_back(tri);
-              const Eigen::Vector3f nrm = (mesh.vertices[tri[1]] - mesh.vertices[tri[0]])
-                                              .cross(mesh.vertices[tri[2]] - mesh.vertices[tri[0]]);
-              for (int c = 0; c < 3; ++c) face_normal_sum[tri[c]] += nrm;
-            };
-            if (simple[l]) {
-              for (int k = 1; k + 1 < lengths[l]; ++k) {
-                add_triangle(Eigen::Vector3i(ids[0], ids[k], ids[k + 1]));
-              }
-            } else {
-              // Fan around a vertex at the loop's centroid, inside this cube only.
-              Eigen::Vector3f centre = Eigen::Vector3f::Zero();
-              for (int k = 0; k < lengths[l]; ++k) centre += mesh.vertices[ids[k]];
-              const int c = static_cast<int>(mesh.vertices.size());
-              mesh.vertices.push_back(centre / static_cast<float>(lengths[l]));
-              face_normal_sum.push_back(Eigen::Vector3f::Zero());
-              for (int k = 0; k < lengths[l]; ++k) {
-                add_triangle(Eigen::Vector3i(c, ids[k], ids[(k + 1) % lengths[l]]));
-              }
+            if (options_.foreground_only && view_.count_index &&
+                samplePfgReference(view_, (v0.cast<float>() + Eigen::Vector3f::Ones()) * vs) <=
+                    0.5f) {
+              continue;
             }
+            meshCube(v0, f);
           }
         }
       }
     }
-  }
-  // Normals: the SDF gradient where the trilinear field is available, else the area-weighted
-  // normal of the adjacent triangles.
-  mesh.normals.resize(mesh.vertices.size());
-  for (size_t i = 0; i < mesh.vertices.size(); ++i) {
-    float psi = 0.f, w = 0.f;
-    Eigen::Vector3f g;
-    Eigen::Vector3f n = face_normal_sum[i];
-    if (sampleSdfReference(view, mesh.vertices[i], &psi, &w, &g) && g.norm() > 0.f) n = g;
-    const float len = n.norm();
-    mesh.normals[i] = len > 0.f ? Eigen::Vector3f(n / len) : Eigen::Vector3f(0.f, 0.f, 1.f);
-  }
-  if (options.world_frame) {
-    const Eigen::Matrix3f R = vol.T_world_volume.rotation().cast<float>();
-    const Eigen::Vector3f t = vol.T_world_volume.translation().cast<float>();
-    for (size_t i = 0; i < mesh.vertices.size(); ++i) {
-      mesh.vertices[i] = R * mesh.vertices[i] + t;
-      mesh.normals[i] = R * mesh.normals[i];
+    finalizeBelow(std::numeric_limits<int64_t>::max());
+    if (!pending_.empty()) {
+      throw std::logic_error("mesh extraction: " + std::to_string(pending_.size()) +
+                             " triangles reference vertices never finalised");
     }
   }
-  return mesh;
-}
 
-// ---- PLY --------------------------------------------------------------------------------------
+ private:
+  struct LiveVertex {
+    Eigen::Vector3f p;     // volume frame, metres
+    Eigen::Vector3f nsum;  // area-weighted sum of the adjacent triangles' normals
+  };
+  using Triangle = std::array<int64_t, 3>;  // vertex keys
 
-namespace {
+  /// Key of edge `axis` (0-2) from voxel v, or of loop centre `axis` - 3 (3-6) of cube v.
+  int64_t key(const Eigen::Vector3i& v, int slot) const {
+    return ((static_cast<int64_t>(v.z()) * stride_y_ + v.y()) * stride_x_ + v.x()) * 8 + slot;
+  }
 
-void appendLe(std::string& out, const void* p, size_t n) {
-  // Little-endian hosts only (x86-64, aarch64 in little-endian mode).
-  out.append(static_cast<const char*>(p), n);
-}
+  bool corner(const Eigen::Vector3i& v, float* psi) const {
+    const int64_t i = view_.voxelIndex(v);
+    if (i < 0) return false;
+    const Voxel& vox = view_.voxels[i];
+    if (vox.weight_q <= 0 || vox.weight_q < min_weight_q_) return false;
+    *psi = vox.tsdf();
+    return true;
+  }
+
+  void meshCube(const Eigen::Vector3i& v0, const float f[8]) {
+    const CubeTopology& topo = topology();
+    const float vs = view_.voxel_size_m;
+    int loops[4][12];
+    int lengths[4];
+    bool simple[4];
+    const int nloops = cubeLoops(f, loops, lengths, simple);
+    for (int l = 0; l < nloops; ++l) {
+      int64_t ids[12];
+      LiveVertex* verts[12];
+      for (int k = 0; k < lengths[l]; ++k) {
+        const int e = loops[l][k];
+        const int c0 = topo.edge[e][0], c1 = topo.edge[e][1];
+        const Eigen::Vector3i vlow = v0 + Eigen::Vector3i(c0 & 1, (c0 >> 1) & 1, (c0 >> 2) & 1);
+        const int axis = topo.edge_axis[e];
+        ids[k] = key(vlow, axis);
+        auto it = live_.find(ids[k]);
+        if (it == live_.end()) {
+          const float t = f[c0] / (f[c0] - f[c1]);
+          Eigen::Vector3f p = vlow.cast<float>() + Eigen::Vector3f::Constant(0.5f);
+          p[axis] += t;
+          it = live_.emplace(ids[k], LiveVertex{p * vs, Eigen::Vector3f::Zero()}).first;
+        }
+        verts[k] = &it->second;
+      }
+      if (simple[l]) {
+        for (int k = 1; k + 1 < lengths[l]; ++k) {
+          addTriangle({ids[0], ids[k], ids[k + 1]}, {verts[0], verts[k], verts[k + 1]});
+        }
+      } else {
+        // Fan around a vertex at the loop's centroid, inside this cube only.
+        Eigen::Vector3f centre = Eigen::Vector3f::Zero();
+        for (int k = 0; k < lengths[l]; ++k) centre += verts[k]->p;
+        const int64_t c = key(v0, 3 + l);
+        LiveVertex* cv = &live_
+                              .emplace(c, LiveVertex{centre / static_cast<float>(lengths[l]),
+                                                     Eigen::Vector3f::Zero()})
+                              .first->second;
+        for (int k = 0; k < lengths[l]; ++k) {
+          const int k1 = (k + 1) % lengths[l];
+          addTriangle({c, ids[k], ids[k1]}, {cv, verts[k], verts[k1]});
+        }
+      }
+    }
+  }
+
+  void addTriangle(const Triangle& tri, const std::array<LiveVertex*, 3>& v) {
+    pending_.push_back(tri);
+    const Eigen::Vector3f nrm = (v[1]->p - v[0]->p).cross(v[2]->p - v[0]->p);
+    for (LiveVertex* x : v) x->nsum += nrm;
+  }
+
+  /// Hands every vertex with a key below `end` (below a voxel layer) to the sink, in key order,
+  /// then every waiting triangle whose vertices are all final.
+  void finalizeBelow(int64_t end) {
+    std::vector<int64_t> keys;
+    for (const auto& [k, v] : live_) {
+      if (k < end) keys.push_back(k);
+    }
+    std::sort(keys.begin(), keys.end());
+    done_prev_ = std::move(done_);
+    done_.clear();
+    positions_.clear();
+    normals_.clear();
+    for (int64_t k : keys) {
+      auto it = live_.find(k);
+      const LiveVertex& v = it->second;
+      // Normal: the SDF gradient where the trilinear field is available, else the
+      // area-weighted normal of the adjacent triangles.
+      float psi = 0.f, w = 0.f;
+      Eigen::Vector3f g;
+      Eigen::Vector3f n = v.nsum;
+      if (sampleSdfReference(view_, v.p, &psi, &w, &g) && g.norm() > 0.f) n = g;
+      const float len = n.norm();
+      n = len > 0.f ? Eigen::Vector3f(n / len) : Eigen::Vector3f(0.f, 0.f, 1.f);
+      positions_.push_back(options_.world_frame ? Eigen::Vector3f(R_ * v.p + t_) : v.p);
+      normals_.push_back(options_.world_frame ? Eigen::Vector3f(R_ * n) : n);
+      done_.emplace(k, next_index_++);
+      live_.erase(it);
+    }
+    if (!positions_.empty())
+      sink_.addVertices(positions_.data(), normals_.data(), positions_.size());
+    triangles_.clear();
+    std::vector<Triangle> waiting;
+    for (const Triangle& tri : pending_) {
+      Eigen::Vector3i out;
+      bool ready = true;
+      for (int c = 0; c < 3 && ready; ++c) {
+        auto it = done_.find(tri[c]);
+        if (it == done_.end()) {
+          it = done_prev_.find(tri[c]);
+          ready = it != done_prev_.end();
+        }
+        if (ready) out[c] = it->second;
+      }
+      if (ready) {
+        triangles_.push_back(out);
+      } else {
+        waiting.push_back(tri);
+      }
+    }
+    pending_.swap(waiting);
+    if (!triangles_.empty()) sink_.addTriangles(triangles_.data(), triangles_.size());
+  }
+
+  const VolumeHostView& view_;
+  const MeshOptions& options_;
+  MeshSink& sink_;
+  const int64_t stride_x_, stride_y_;
+  const Eigen::Matrix3f R_;
+  const Eigen::Vector3f t_;
+  const int min_weight_q_ = static_cast<int>(std::ceil(options_.min_weight * kWeightScale));
+  std::unordered_map<int64_t, LiveVertex> live_;
+  std::unordered_map<int64_t, int32_t> done_, done_prev_;  // key -> output index
+  std::vector<Triangle> pending_;
+  int32_t next_index_ = 0;
+  std::vector<Eigen::Vector3f> positions_, normals_;  // one batch for the sink
+  std::vector<Eigen::Vector3i> triangles_;
+};
+
+/// Collects the streamed mesh in memory.
+class MeshCollector : public MeshSink {
+ public:
+  explicit MeshCollector(Mesh* mesh) : mesh_(mesh) {}
+  void addVertices(const Eigen::Vector3f* positions, const Eigen::Vector3f* normals,
+                   size_t count) override {
+    mesh_->vertices.insert(mesh_->vertices.end(), positions, positions + count);
+    mesh_->normals.insert(mesh_->normals.end(), normals, normals + count);
+  }
+  void addTriangles(const Eigen::Vector3i* triangles, size_t count) override {
+    mesh_->triangles.insert(mesh_->triangles.end(), triangles, triangles + count);
+  }
+
+ private:
+  Mesh* mesh_;
+};
 
 }  // namespace
 
-void writePly(const std::string& path, const Mesh& mesh, bool binary) {
-  namespace fs = std::filesystem;
-  static_assert(sizeof(float) == 4 && sizeof(int32_t) == 4, "PLY float/int are 32-bit");
-  std::ostringstream header;
-  header << "ply\nformat " << (binary ? "binary_little_endian" : "ascii") << " 1.0\n"
-         << "comment emf mesh: metres, normals point to the free side\n"
-         << "element vertex " << mesh.vertices.size() << "\n"
-         << "property float x\nproperty float y\nproperty float z\n"
-         << "property float nx\nproperty float ny\nproperty float nz\n"
-         << "element face " << mesh.triangles.size() << "\n"
-         << "property list uchar int vertex_indices\nend_header\n";
-  std::string body = header.str();
-  if (binary) {
-    body.reserve(body.size() + mesh.vertices.size() * 24 + mesh.triangles.size() * 13);
-    for (size_t i = 0; i < mesh.vertices.size(); ++i) {
-      const float v[6] = {mesh.vertices[i].x(), mesh.vertices[i].y(), mesh.vertices[i].z(),
-                          mesh.normals[i].x(),  mesh.normals[i].y(),  mesh.normals[i].z()};
-      appendLe(body, v, sizeof(v));
-    }
-    for (const Eigen::Vector3i& t : mesh.triangles) {
-      const uint8_t n = 3;
-      const int32_t idx[3] = {t.x(), t.y(), t.z()};
-      appendLe(body, &n, 1);
-      appendLe(body, idx, sizeof(idx));
-    }
-  } else {
-    std::ostringstream os;
-    os.imbue(std::locale::classic());
-    os.precision(9);
-    for (size_t i = 0; i < mesh.vertices.size(); ++i) {
-      os << mesh.vertices[i].x() << ' ' << mesh.vertices[i].y() << ' ' << mesh.vertices[i].z()
-         << ' ' << mesh.normals[i].x() << ' ' << mesh.normals[i].y() << ' ' << mesh.normals[i].z()
-         << '\n';
-    }
-    for (const Eigen::Vector3i& t : mesh.triangles) {
-      os << "3 " << t.x() << ' ' << t.y() << ' ' << t.z() << '\n';
-    }
-    body += os.str();
-  }
-  const fs::path target(path);
-  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  static std::atomic<int> counter{0};
-  const fs::path tmp =
-      dir / ("." + target.filename().string() + ".tmp-" +
-             std::to_string(static_cast<long>(::getpid())) + "-" + std::to_string(counter++));
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) {
-      throw IoError("cannot write mesh " + path + ": cannot create " + tmp.string() +
-                    " (does the folder exist and is it writable?)");
-    }
-    out.write(body.data(), static_cast<std::streamsize>(body.size()));
-    out.flush();
-    if (!out) {
-      std::error_code ec;
-      fs::remove(tmp, ec);
-      throw IoError("cannot write mesh " + path + ": write to " + tmp.string() +
-                    " failed (disk full?)");
-    }
-  }
-  std::error_code ec;
-  fs::rename(tmp, target, ec);
-  if (ec) {
-    std::error_code ignored;  // keep the rename's error for the message
-    fs::remove(tmp, ignored);
-    throw IoError("cannot write mesh " + path + ": rename from " + tmp.string() +
-                  " failed: " + ec.message());
-  }
+void extractMesh(const VolumeHostView& view, const Eigen::Isometry3d& T_world_volume,
+                 const MeshOptions& options, MeshSink& sink) {
+  MeshStreamer(view, T_world_volume, options, sink).run();
 }
 
-Mesh readPly(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError("cannot open PLY file " + path);
-  auto fail = [&](const std::string& what) { throw IoError("PLY file " + path + ": " + what); };
-  std::string line;
-  std::getline(in, line);
-  if (line != "ply") fail("does not start with 'ply'");
-  bool binary = false;
-  size_t nv = 0, nf = 0;
-  int vertex_props = 0;
-  std::string element;
-  while (std::getline(in, line)) {
-    std::istringstream ls(line);
-    std::string word;
-    ls >> word;
-    if (word == "format") {
-      std::string fmt;
-      ls >> fmt;
-      if (fmt == "binary_little_endian") {
-        binary = true;
-      } else if (fmt != "ascii") {
-        fail("unsupported format '" + fmt + "'");
-      }
-    } else if (word == "element") {
-      size_t n = 0;
-      ls >> element >> n;
-      if (element == "vertex") nv = n;
-      if (element == "face") nf = n;
-    } else if (word == "property" && element == "vertex") {
-      ++vertex_props;
-    } else if (word == "end_header") {
-      break;
-    }
-  }
-  if (vertex_props != 6) fail("expected 6 float vertex properties (x y z nx ny nz)");
-  Mesh m;
-  m.vertices.resize(nv);
-  m.normals.resize(nv);
-  m.triangles.resize(nf);
-  for (size_t i = 0; i < nv; ++i) {
-    float v[6];
-    if (binary) {
-      in.read(reinterpret_cast<char*>(v), sizeof(v));
-    } else {
-      for (float& x : v) in >> x;
-    }
-    if (!in) fail("truncated vertex list at vertex " + std::to_string(i));
-    m.vertices[i] = Eigen::Vector3f(v[0], v[1], v[2]);
-    m.normals[i] = Eigen::Vector3f(v[3], v[4], v[5]);
-  }
-  for (size_t i = 0; i < nf; ++i) {
-    int32_t idx[3];
-    if (binary) {
-      uint8_t n = 0;
-      in.read(reinterpret_cast<char*>(&n), 1);
-      if (n != 3) fail("face " + std::to_string(i) + " is not a triangle");
-      in.read(reinterpret_cast<char*>(idx), sizeof(idx));
-    } else {
-      int n = 0;
-      in >> n;
-      if (n != 3) fail("face " + std::to_string(i) + " is not a triangle");
-      in >> idx[0] >> idx[1] >> idx[2];
-    }
-    if (!in) fail("truncated face list at face " + std::to_string(i));
-    for (int c = 0; c < 3; ++c) {
-      if (idx[c] < 0 || static_cast<size_t>(idx[c]) >= nv) {
-        fail("face " + std::to_string(i) + " indexes vertex " + std::to_string(idx[c]) + " of " +
-             std::to_string(nv));
-      }
-    }
-    m.triangles[i] = Eigen::Vector3i(idx[0], idx[1], idx[2]);
-  }
-  return m;
+Mesh extractMesh(const VolumeHostView& view, const Eigen::Isometry3d& T_world_volume,
+                 const MeshOptions& options) {
+  Mesh mesh;
+  MeshCollector collector(&mesh);
+  extractMesh(view, T_world_volume, options, collector);
+  return mesh;
+}
+
+Mesh extractMesh(const VolumeHostData& vol, const MeshOptions& options) {
+  return extractMesh(vol.view(), vol.T_world_volume, options);
 }
 
 }  // namespace emf::map

@@ -1,4 +1,4 @@
-// Mesh extraction from a volume (marching cubes on the host) and PLY files.
+// Mesh extraction from a volume (marching cubes on the host); PLY files are in io/ply.h.
 //
 // Marching cubes here builds each cube's polygons directly from the corner signs instead of the
 // classic 256-case tables: on every cube face the iso-line segments are found by walking the face
@@ -11,6 +11,8 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -36,15 +38,25 @@ struct MeshOptions {
   bool foreground_only = true;
 };
 
-/// Marching cubes over all allocated blocks of `vol` (cubes across block borders included).
+/// Receives a mesh in pieces: vertices with consecutive indices from 0 in the order given,
+/// triangles (indices into them) once their vertices have been given.
+class MeshSink {
+ public:
+  virtual ~MeshSink() = default;
+  virtual void addVertices(const Eigen::Vector3f* positions, const Eigen::Vector3f* normals,
+                           size_t count) = 0;
+  virtual void addTriangles(const Eigen::Vector3i* triangles, size_t count) = 0;
+};
+
+/// Marching cubes over all allocated blocks of the volume `view` shows (cubes across block
+/// borders included), streamed to `sink` one z-layer of blocks at a time: the extraction holds
+/// the vertices of about two block layers, not the mesh. Vertices come in z-major order of
+/// their cube edge. `T_world_volume` is applied when options.world_frame is set.
+void extractMesh(const VolumeHostView& view, const Eigen::Isometry3d& T_world_volume,
+                 const MeshOptions& options, MeshSink& sink);
+/// The same, collected in memory.
+Mesh extractMesh(const VolumeHostView& view, const Eigen::Isometry3d& T_world_volume,
+                 const MeshOptions& options = MeshOptions());
 Mesh extractMesh(const VolumeHostData& vol, const MeshOptions& options = MeshOptions());
-
-/// Writes `mesh` as PLY (binary little-endian or ASCII) with vertex normals, atomically: to a
-/// temporary file in the same folder, then renamed over `path`. Throws IoError naming the file.
-void writePly(const std::string& path, const Mesh& mesh, bool binary);
-
-/// Reads a PLY file written by writePly (either format). Throws IoError naming the file and
-/// what is wrong.
-Mesh readPly(const std::string& path);
 
 }  // namespace emf::map

@@ -12,7 +12,9 @@
 #include "common/error.h"
 #include "common/log.h"
 #include "io/atomic_output.h"
+#include "io/ply.h"
 #include "map/mesh.h"
+#include "map/volume_host_access.h"
 
 namespace emf::pipeline {
 
@@ -150,23 +152,26 @@ void ObjectOutputs::add(const FrameOutcome& outcome) {
   }
 }
 
-void ObjectOutputs::writeMesh(int id, const map::VolumeHostData& volume) {
+void ObjectOutputs::writeMesh(int id, const map::VolumeHostView& volume,
+                              const Eigen::Isometry3d& T_volume_initial) {
   ensureDir(dir_);
-  map::MeshOptions options;
-  options.world_frame = false;  // volume frame, then moved into the object's frame
-  map::Mesh mesh = map::extractMesh(volume, options);
   // The object's frame is the volume frame at creation (a translation away after growth):
   // the frame of object-<id>.txt, placed in the world by T_world_object.
-  const Eigen::Vector3f shift = volume.T_volume_initial.inverse().translation().cast<float>();
-  for (auto& v : mesh.vertices) v += shift;
-  map::writePly(dir_ + "/" + meshName(id), mesh, binary_ply_);
+  Eigen::Isometry3d T_object_volume = Eigen::Isometry3d::Identity();
+  T_object_volume.translation() = T_volume_initial.inverse().translation();
+  map::MeshOptions options;
+  options.world_frame = true;  // "world" = the object's frame here
+  io::PlyWriter ply(dir_ + "/" + meshName(id), binary_ply_);
+  map::extractMesh(volume, T_object_volume, options, ply);
+  ply.commit();
   Track& t = tracks_[id];
   t.summary.id = id;
   t.summary.mesh_file = meshName(id);
 }
 
 void ObjectOutputs::onObjectDeleted(int id, const map::Volume& volume) {
-  writeMesh(id, volume.download());
+  const map::VolumeHostAccess access(volume);
+  writeMesh(id, access.view(), access.T_volume_initial());
 }
 
 void ObjectOutputs::writeFrameImages(const FrameOutcome& outcome, const cv::Mat& color,
@@ -213,7 +218,7 @@ void ObjectOutputs::finish(const std::function<const map::Volume*(int id)>& volu
                  " without onObjectDeleted(): no ", meshName(id), " (its volume is gone)");
     }
     if (t.summary.deleted || !volume_of) continue;
-    if (const map::Volume* v = volume_of(id)) writeMesh(id, v->download());
+    if (const map::Volume* v = volume_of(id)) onObjectDeleted(id, *v);
   }
   writeTrajectories();
   removeStaleObjectFiles();

@@ -76,9 +76,10 @@ class ObjectOutputs {
   /// Writes object-<id>.ply from `volume` now: call before an object's volume is freed.
   /// Throws IoError when the file cannot be written.
   void onObjectDeleted(int id, const map::Volume& volume);
-  /// Writes object-<id>.ply from a host copy of the volume (vertices in the object's frame,
-  /// VolumeHostData::T_volume_initial).
-  void writeMesh(int id, const map::VolumeHostData& volume);
+  /// Writes object-<id>.ply from a host view of the volume, streamed (vertices in the object's
+  /// frame: the volume frame at creation, `T_volume_initial` as Volume::T_volume_initial()).
+  void writeMesh(int id, const map::VolumeHostView& volume,
+                 const Eigen::Isometry3d& T_volume_initial);
 
   /// Writes images/<index>-objects.png (overlay of `object_ids`, CV_32S, on `color`) and one
   /// images/<index>-q<id>.png per association map. Throws InvalidArgument naming the frame for

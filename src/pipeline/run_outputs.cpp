@@ -4,7 +4,9 @@
 
 #include "common/error.h"
 #include "io/atomic_output.h"
+#include "io/ply.h"
 #include "map/mesh.h"
+#include "map/volume_host_access.h"
 
 namespace emf::pipeline {
 
@@ -128,8 +130,11 @@ void writeRunOutputs(const std::string& dir, SlamSystem& slam, const cl::Context
   // run.json is written even when the mesh cannot be (e.g. after a device error ended the run).
   std::string mesh_error;
   try {
-    const map::Mesh mesh = map::extractMesh(slam.background().download());
-    map::writePly(dir + "/background.ply", mesh, binary_ply);
+    // Streamed from the mapped volume into the file: no host copy of the map, no mesh in memory.
+    const map::VolumeHostAccess access(slam.background());
+    io::PlyWriter ply(dir + "/background.ply", binary_ply);
+    map::extractMesh(access.view(), access.T_world_volume(), map::MeshOptions(), ply);
+    ply.commit();
   } catch (const std::exception& e) {
     mesh_error = std::string("background.ply not written: ") + e.what();
   }

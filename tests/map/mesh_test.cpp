@@ -8,6 +8,7 @@
 #include <random>
 
 #include "common/error.h"
+#include "io/ply.h"
 #include "map/mesh_distance.h"
 #include "test_support.h"
 
@@ -141,14 +142,14 @@ TEST(Mesh, PlyBinaryAndAsciiRoundTripAtomically) {
   const std::string dir = tempDir("ply");
   for (bool binary : {true, false}) {
     const std::string path = dir + (binary ? "/m_bin.ply" : "/m_ascii.ply");
-    map::writePly(path, m, binary);
+    io::writePly(path, m, binary);
     std::ifstream in(path);
     std::string l1, l2;
     std::getline(in, l1);
     std::getline(in, l2);
     EXPECT_EQ(l1, "ply");
     EXPECT_EQ(l2, binary ? "format binary_little_endian 1.0" : "format ascii 1.0");
-    const map::Mesh r = map::readPly(path);
+    const map::Mesh r = io::readPly(path);
     ASSERT_EQ(r.vertices.size(), m.vertices.size());
     ASSERT_EQ(r.triangles.size(), m.triangles.size());
     const float tol = binary ? 0.f : 1e-6f;
@@ -167,7 +168,7 @@ TEST(Mesh, PlyBinaryAndAsciiRoundTripAtomically) {
   EXPECT_EQ(files, 2);
   // Unwritable target: IoError naming the file.
   try {
-    map::writePly(dir + "/no/such/folder/m.ply", m, true);
+    io::writePly(dir + "/no/such/folder/m.ply", m, true);
     FAIL() << "expected IoError";
   } catch (const IoError& e) {
     EXPECT_NE(std::string(e.what()).find("no/such/folder/m.ply"), std::string::npos) << e.what();
@@ -175,7 +176,7 @@ TEST(Mesh, PlyBinaryAndAsciiRoundTripAtomically) {
   // A target that is a folder: the rename's own error, not the clean-up's "Success".
   std::filesystem::create_directories(dir + "/a_folder.ply");
   try {
-    map::writePly(dir + "/a_folder.ply", m, true);
+    io::writePly(dir + "/a_folder.ply", m, true);
     FAIL() << "expected IoError";
   } catch (const IoError& e) {
     const std::string what = e.what();
@@ -191,7 +192,58 @@ TEST(Mesh, PlyBinaryAndAsciiRoundTripAtomically) {
                                        "property float nx\nproperty float ny\nproperty float nz\n"
                                        "element face 0\nend_header\n1 2 3 0 0 1\n";
   }
-  EXPECT_THROW(map::readPly(dir + "/bad.ply"), IoError);
+  EXPECT_THROW(io::readPly(dir + "/bad.ply"), IoError);
+}
+
+TEST(Mesh, StreamedPlyEqualsTheMeshInMemoryAcrossBlockLayers) {
+  // A sphere spanning four z-layers of blocks, the third layer unallocated (the walk jumps a
+  // layer): the streamed file holds exactly the in-memory mesh, closed where the layers are.
+  const Eigen::Vector3f c(0.16f, 0.16f, 0.16f);
+  map::VolumeHostData h = filledVolume(
+      Eigen::Vector3i(4, 4, 4), 0.01f, 0.05f,
+      [&](const Eigen::Vector3f& p, const Eigen::Vector3i&) { return (p - c).norm() - 0.13f; });
+  const map::Mesh whole = map::extractMesh(h);
+  expectClosedAndOriented(whole);
+  for (size_t lin = 0; lin < h.index.size(); ++lin) {
+    if (map::blockCoords(h.dims_blocks, static_cast<int>(lin)).z() == 2) h.index[lin] = -1;
+  }
+  h.T_world_volume.translation() = Eigen::Vector3d(-1, 0.5, 2);
+  const map::Mesh m = map::extractMesh(h);
+  ASSERT_GT(m.triangles.size(), 1000u);
+  ASSERT_LT(m.triangles.size(), whole.triangles.size());
+  const std::string dir = tempDir("ply-stream");
+  for (bool binary : {true, false}) {
+    const std::string path = dir + (binary ? "/s_bin.ply" : "/s_ascii.ply");
+    io::PlyWriter writer(path, binary);
+    map::extractMesh(h.view(), h.T_world_volume, map::MeshOptions(), writer);
+    EXPECT_EQ(writer.vertexCount(), m.vertices.size());
+    EXPECT_EQ(writer.triangleCount(), m.triangles.size());
+    writer.commit();
+    const map::Mesh r = io::readPly(path);
+    ASSERT_EQ(r.vertices.size(), m.vertices.size());
+    const float tol = binary ? 0.f : 1e-6f;
+    for (size_t i = 0; i < m.vertices.size(); ++i) {
+      ASSERT_LE((r.vertices[i] - m.vertices[i]).cwiseAbs().maxCoeff(), tol) << i;
+      ASSERT_LE((r.normals[i] - m.normals[i]).cwiseAbs().maxCoeff(), tol) << i;
+    }
+    EXPECT_EQ(r.triangles, m.triangles);
+  }
+  // Vertices come in z-major order of their cube edge's lower voxel: a vertex lies at most one
+  // voxel above that voxel's centre (a z edge, a loop's centre), so z never drops by more.
+  for (size_t i = 1; i < m.vertices.size(); ++i) {
+    ASSERT_GE(m.vertices[i].z() - m.vertices[i - 1].z(), -0.0101f) << i;
+  }
+  // A writer abandoned without commit() leaves nothing behind, not even its temporary files.
+  {
+    io::PlyWriter abandoned(dir + "/abandoned.ply", true);
+    map::extractMesh(h.view(), h.T_world_volume, map::MeshOptions(), abandoned);
+  }
+  int files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    ++files;
+    EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
+  }
+  EXPECT_EQ(files, 2);
 }
 
 TEST(MeshDistanceTest, MatchesBruteForce) {

@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "common/error.h"
+#include "io/ply.h"
 #include "io/trajectory.h"
 #include "map/map_math.h"
 #include "map/mesh.h"
@@ -208,8 +209,9 @@ TEST(ObjectOutputs, MeshIsInTheObjectFrame) {
   const float voxel = 0.01f, radius = 0.07f;
   const Eigen::Vector3f centre(0.12f, 0.12f, 0.12f);  // volume frame, metres
   out.add(frame(0, {object(5, "bottle", ObjectState::kTracked, 0.0)}));
-  out.writeMesh(5, sphereVolume(centre, radius, voxel));
-  const map::Mesh m = map::readPly(dir + "/object-5.ply");
+  const map::VolumeHostData sphere = sphereVolume(centre, radius, voxel);
+  out.writeMesh(5, sphere.view(), sphere.T_volume_initial);
+  const map::Mesh m = io::readPly(dir + "/object-5.ply");
   ASSERT_GT(m.vertices.size(), 100u);
   float max_err = 0;
   for (const Eigen::Vector3f& v : m.vertices) {
@@ -225,8 +227,8 @@ TEST(ObjectOutputs, MeshIsInTheObjectFrame) {
   map::VolumeHostData grown = sphereVolume(centre, radius, voxel);
   const Eigen::Vector3d low_m(0.08, 0.0, 0.16);
   grown.T_volume_initial.translation() = low_m;
-  out.writeMesh(7, grown);
-  const map::Mesh g = map::readPly(dir + "/object-7.ply");
+  out.writeMesh(7, grown.view(), grown.T_volume_initial);
+  const map::Mesh g = io::readPly(dir + "/object-7.ply");
   ASSERT_EQ(g.vertices.size(), m.vertices.size());
   float max_grown_err = 0;
   for (const Eigen::Vector3f& v : g.vertices) {

@@ -1,0 +1,53 @@
+// PLY files of meshes: x y z nx ny nz float vertices and uchar-int triangle lists, binary
+// little-endian or ASCII. Written atomically and, through PlyWriter, streamed: a mesh extracted
+// straight into a PlyWriter is never held in memory as a whole.
+#pragma once
+
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "io/atomic_output.h"
+#include "map/mesh.h"
+
+namespace emf::io {
+
+/// A PLY file being written from a stream of vertices and triangles (a MeshSink). The pieces
+/// go to two temporary files next to `path`; commit() writes the header with the final counts,
+/// the vertices and the triangles to a temporary file, fsyncs it and renames it over `path`.
+/// Destroying it without commit() removes every temporary file and leaves `path` untouched.
+class PlyWriter : public map::MeshSink {
+ public:
+  /// Throws IoError naming `path` when the temporary files cannot be created there.
+  PlyWriter(std::string path, bool binary);
+  ~PlyWriter() override;
+  PlyWriter(const PlyWriter&) = delete;
+  PlyWriter& operator=(const PlyWriter&) = delete;
+
+  void addVertices(const Eigen::Vector3f* positions, const Eigen::Vector3f* normals,
+                   size_t count) override;
+  void addTriangles(const Eigen::Vector3i* triangles, size_t count) override;
+  /// Throws IoError naming the file (disk full, rename failed, ...).
+  void commit();
+
+  size_t vertexCount() const { return vertices_; }
+  size_t triangleCount() const { return triangles_; }
+
+ private:
+  class Part;
+  std::string path_;
+  bool binary_;
+  std::unique_ptr<Part> vertex_part_, face_part_;
+  size_t vertices_ = 0, triangles_ = 0;
+  std::string buffer_;  // one batch, encoded
+};
+
+/// Writes `mesh` as PLY (binary little-endian or ASCII) with vertex normals, atomically.
+/// Throws IoError naming the file.
+void writePly(const std::string& path, const map::Mesh& mesh, bool binary);
+
+/// Reads a PLY file written by writePly / PlyWriter (either format). Throws IoError naming the
+/// file and what is wrong.
+map::Mesh readPly(const std::string& path);
+
+}  // namespace emf::io

@@ -1,0 +1,54 @@
+// Read-only host access to a volume for mesh extraction and other whole-volume reads on the
+// host. On a device whose memory is the host's (CL_DEVICE_HOST_UNIFIED_MEMORY: CPU devices
+// such as PoCL, integrated GPUs) the index grids and the voxel pool are mapped, not copied: a
+// 20000-block background is 41 MiB of voxels that Volume::download() would duplicate. On other
+// devices the volume's blocks are downloaded (VolumeHostData, compact).
+//
+// Hold it only between frames: the volume must not be changed while it lives (the mapped
+// buffers are the live ones), and the queue is used from the calling thread.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <memory>
+
+#include "map/volume.h"
+#include "map/voxel_layout.h"
+
+namespace emf::cl {
+class MappedRead;
+}
+
+namespace emf::map {
+
+class VolumeHostAccess {
+ public:
+  /// Maps (host-unified memory) or downloads `volume`. Throws ClError / ResourceError.
+  explicit VolumeHostAccess(const Volume& volume);
+  /// Always downloads (tests compare both ways).
+  static VolumeHostAccess downloaded(const Volume& volume);
+  ~VolumeHostAccess();
+  VolumeHostAccess(VolumeHostAccess&&) noexcept;
+  VolumeHostAccess& operator=(VolumeHostAccess&&) = delete;
+  VolumeHostAccess(const VolumeHostAccess&) = delete;
+  VolumeHostAccess& operator=(const VolumeHostAccess&) = delete;
+
+  /// Index grids and voxels; valid while this object lives.
+  const VolumeHostView& view() const { return view_; }
+  const Eigen::Isometry3d& T_world_volume() const { return T_world_volume_; }
+  /// See Volume::T_volume_initial().
+  const Eigen::Isometry3d& T_volume_initial() const { return T_volume_initial_; }
+  /// True when the device buffers are mapped, false when they were copied.
+  bool mapped() const { return mapped_; }
+
+ private:
+  VolumeHostAccess(const Volume& volume, bool allow_mapping);
+
+  VolumeHostView view_;
+  Eigen::Isometry3d T_world_volume_ = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_volume_initial_ = Eigen::Isometry3d::Identity();
+  bool mapped_ = false;
+  std::unique_ptr<cl::MappedRead> index_, count_index_, voxels_;  // when mapped
+  std::unique_ptr<VolumeHostData> copy_;                          // when downloaded
+};
+
+}  // namespace emf::map
