@@ -186,8 +186,9 @@ typedef struct emf_mesh {
 EMF_API emf_status emf_system_extract_mesh(emf_system* system, int32_t volume_id, emf_mesh** out);
 /** Frees a mesh. NULL is a no-op. Thread-safe for distinct meshes. */
 EMF_API void emf_mesh_destroy(emf_mesh* mesh);
-/** Writes the mesh of `volume_id` to a binary PLY file with normals, atomically (temporary file
- *  in the same folder, then rename). Same rules as emf_system_extract_mesh. */
+/** Writes the mesh of `volume_id` to a binary PLY file with normals, atomically (temporary files
+ *  in the same folder, then rename). Streamed: the mesh is never held in memory as a whole.
+ *  Same rules as emf_system_extract_mesh. */
 EMF_API emf_status emf_system_save_mesh(emf_system* system, int32_t volume_id, const char* path);
 
 /** Renders the map (background and rendered objects) from a camera pose (NULL = the current
