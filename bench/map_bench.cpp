@@ -302,7 +302,7 @@ Result run(emf::cl::Context& ctx, const BenchSequence& seq, const Config& cfg, i
   // The mesh written to a PLY file two ways, one after the other, each measured by its time and
   // the resident memory it adds (peak RSS during it, reset right before, minus the RSS before;
   // freed heap returned to the system in between):
-  //  - stream (what emf run and emf_system_save_mesh do): the volume mapped on a host-unified
+  //  - stream (what emf run and emf_system_save_mesh do): the volume mapped on a CPU
   //    device (downloaded otherwise), the mesh streamed into the file one block layer at a time;
   //  - copy (the reference: emf before streaming): the volume downloaded, the mesh built in
   //    memory, then written. Its mesh is kept for the reconstruction error below.
@@ -502,8 +502,8 @@ int main(int argc, char** argv) {
         "way emf does:\nvolume mapped (%s), mesh streamed into the file; copy_s / copy_MB: "
         "the reference, volume downloaded, mesh built\nin memory, then written.\n",
         error_every, error_stride,
-        results.empty() || results[0].mesh_mapped ? "host-unified memory: no copy"
-                                                  : "not host-unified: downloaded");
+        results.empty() || results[0].mesh_mapped ? "CPU device: no copy"
+                                                  : "not a CPU device: downloaded");
     for (const Result& r : results) {
       std::printf(
           "object volume %dx%d @ %gcm: %d blocks, %.2f bytes per voxel (TSDF + Fg/Bg "

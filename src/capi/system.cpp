@@ -499,7 +499,8 @@ EMF_API emf_status emf_system_extract_mesh(emf_system* system, int32_t volume_id
     const size_t nv = arrays->positions.size() / 3, nt = arrays->indices.size() / 3;
     if (nv > static_cast<size_t>(std::numeric_limits<int32_t>::max()) ||
         nt > static_cast<size_t>(std::numeric_limits<int32_t>::max())) {
-      throw emf::ResourceError("the mesh has " + std::to_string(nt) +
+      throw emf::ResourceError("the mesh has " + std::to_string(nv) + " vertices and " +
+                               std::to_string(nt) +
                                " triangles, more than emf_mesh counts (int32)");
     }
     for (auto* v : {&arrays->positions, &arrays->normals}) v->reserve(1);  // never NULL

@@ -26,7 +26,7 @@ struct DeviceInfo {
   size_t max_work_group_size = 0;
   bool is_pocl = false;
   /// CL_DEVICE_HOST_UNIFIED_MEMORY: the device's memory is the host's (CPU devices, most
-  /// integrated GPUs), so mapping a buffer for reading need not copy it.
+  /// integrated GPUs). On a CPU device mapping a buffer for reading does not copy it.
   bool host_unified_memory = false;
 
   /// "PoCL CPU: pthread-skylake... (OpenCL 1.2 ...)".

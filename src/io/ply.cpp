@@ -17,62 +17,92 @@ namespace emf::io {
 
 static_assert(sizeof(float) == 4 && sizeof(int32_t) == 4, "PLY float/int are 32-bit");
 
-/// A temporary file next to the PLY being written, removed when destroyed.
-class PlyWriter::Part {
+namespace {
+
+/// Bytes reserved for the header at the start of the file: the longest header (20-digit counts)
+/// is about 320 bytes; a comment line pads the real one to this size.
+constexpr size_t kHeaderBytes = 400;
+
+std::string plyHeader(bool binary, size_t vertices, size_t triangles) {
+  std::ostringstream h;
+  h.imbue(std::locale::classic());  // no digit grouping from the host program's global locale
+  h << "ply\nformat " << (binary ? "binary_little_endian" : "ascii") << " 1.0\n"
+    << "comment emf mesh: metres, normals point to the free side\n"
+    << "element vertex " << vertices << "\n"
+    << "property float x\nproperty float y\nproperty float z\n"
+    << "property float nx\nproperty float ny\nproperty float nz\n"
+    << "element face " << triangles << "\n"
+    << "property list uchar int vertex_indices\n";
+  std::string head = h.str();
+  const std::string end = "end_header\n";
+  const size_t pad = kHeaderBytes - head.size() - end.size();  // >= 60
+  return head + "comment" + std::string(pad - 8, ' ') + "\n" + end;
+}
+
+}  // namespace
+
+/// The triangles' temporary file: created next to the PLY and unlinked at once (it lives until
+/// closed, and no crash can leave it behind).
+class PlyWriter::FacePart {
  public:
-  Part(const std::string& target, const char* what) {
+  explicit FacePart(const std::string& target) {
     namespace fs = std::filesystem;
     static std::atomic<int> counter{0};
     const fs::path t(target);
     const fs::path dir = t.has_parent_path() ? t.parent_path() : fs::path(".");
     path_ = (dir / ("." + t.filename().string() + ".tmp-" +
                     std::to_string(static_cast<long>(::getpid())) + "-" +
-                    std::to_string(counter++) + "-" + what))
+                    std::to_string(counter++) + "-faces"))
                 .string();
     file_ = std::fopen(path_.c_str(), "w+b");
     if (!file_) {
       throw IoError("cannot write mesh " + target + ": cannot create " + path_ + ": " +
                     std::strerror(errno) + " (does the folder exist and is it writable?)");
     }
+    unlinked_ = ::unlink(path_.c_str()) == 0;
   }
-  ~Part() {
+  ~FacePart() {
     std::fclose(file_);
-    std::error_code ec;
-    std::filesystem::remove(path_, ec);
+    if (!unlinked_) ::unlink(path_.c_str());
   }
-  Part(const Part&) = delete;
-  Part& operator=(const Part&) = delete;
+  FacePart(const FacePart&) = delete;
+  FacePart& operator=(const FacePart&) = delete;
 
   void write(const std::string& bytes, const std::string& target) {
     if (!bytes.empty() && std::fwrite(bytes.data(), 1, bytes.size(), file_) != bytes.size()) {
-      throw IoError("cannot write mesh " + target + ": write to " + path_ +
+      throw IoError("cannot write mesh " + target + ": writing its triangles to " + path_ +
                     " failed: " + std::strerror(errno) + " (disk full?)");
     }
   }
   /// Appends the whole part to `out`.
   void copyTo(AtomicOutputFile& out, const std::string& target) {
     if (std::fflush(file_) != 0 || std::fseek(file_, 0, SEEK_SET) != 0) {
-      throw IoError("cannot write mesh " + target + ": cannot read back " + path_ + ": " +
-                    std::strerror(errno));
+      throw IoError("cannot write mesh " + target + ": cannot read back its triangles from " +
+                    path_ + ": " + std::strerror(errno));
     }
     std::vector<char> chunk(1 << 20);
     size_t n = 0;
     while ((n = std::fread(chunk.data(), 1, chunk.size(), file_)) > 0) out.write(chunk.data(), n);
     if (std::ferror(file_)) {
-      throw IoError("cannot write mesh " + target + ": cannot read back " + path_);
+      throw IoError("cannot write mesh " + target + ": cannot read back its triangles from " +
+                    path_);
     }
   }
 
  private:
   std::string path_;
   FILE* file_ = nullptr;
+  bool unlinked_ = false;
 };
 
 PlyWriter::PlyWriter(std::string path, bool binary)
     : path_(std::move(path)),
       binary_(binary),
-      vertex_part_(std::make_unique<Part>(path_, "vertices")),
-      face_part_(std::make_unique<Part>(path_, "faces")) {}
+      out_(std::make_unique<AtomicOutputFile>(path_)),
+      faces_(std::make_unique<FacePart>(path_)) {
+  const std::string reserved(kHeaderBytes, ' ');
+  out_->write(reserved.data(), reserved.size());
+}
 
 PlyWriter::~PlyWriter() = default;
 
@@ -97,7 +127,7 @@ void PlyWriter::addVertices(const Eigen::Vector3f* positions, const Eigen::Vecto
     }
     buffer_ = os.str();
   }
-  vertex_part_->write(buffer_, path_);
+  out_->write(buffer_.data(), buffer_.size());
   vertices_ += count;
 }
 
@@ -119,34 +149,24 @@ void PlyWriter::addTriangles(const Eigen::Vector3i* triangles, size_t count) {
     }
     buffer_ = os.str();
   }
-  face_part_->write(buffer_, path_);
+  faces_->write(buffer_, path_);
   triangles_ += count;
 }
 
 void PlyWriter::commit() {
-  if (!vertex_part_) return;  // committed already
-  std::ostringstream header;
-  header << "ply\nformat " << (binary_ ? "binary_little_endian" : "ascii") << " 1.0\n"
-         << "comment emf mesh: metres, normals point to the free side\n"
-         << "element vertex " << vertices_ << "\n"
-         << "property float x\nproperty float y\nproperty float z\n"
-         << "property float nx\nproperty float ny\nproperty float nz\n"
-         << "element face " << triangles_ << "\n"
-         << "property list uchar int vertex_indices\nend_header\n";
-  const std::string h = header.str();
+  if (!out_) return;  // committed already
   try {
-    AtomicOutputFile out(path_);
-    out.write(h.data(), h.size());
-    vertex_part_->copyTo(out, path_);
-    face_part_->copyTo(out, path_);
-    out.commit();
+    faces_->copyTo(*out_, path_);
+    const std::string header = plyHeader(binary_, vertices_, triangles_);
+    out_->writeAt(0, header.data(), header.size());
+    out_->commit();
   } catch (const IoError& e) {
     const std::string what = e.what();
     if (what.find(path_) != std::string::npos) throw;
     throw IoError("cannot write mesh " + path_ + ": " + what);
   }
-  vertex_part_.reset();
-  face_part_.reset();
+  out_.reset();
+  faces_.reset();
 }
 
 void writePly(const std::string& path, const map::Mesh& mesh, bool binary) {
@@ -159,6 +179,7 @@ void writePly(const std::string& path, const map::Mesh& mesh, bool binary) {
 map::Mesh readPly(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError("cannot open PLY file " + path);
+  in.imbue(std::locale::classic());
   auto fail = [&](const std::string& what) { throw IoError("PLY file " + path + ": " + what); };
   std::string line;
   std::getline(in, line);
@@ -169,6 +190,7 @@ map::Mesh readPly(const std::string& path) {
   std::string element;
   while (std::getline(in, line)) {
     std::istringstream ls(line);
+    ls.imbue(std::locale::classic());
     std::string word;
     ls >> word;
     if (word == "format") {

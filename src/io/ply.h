@@ -12,10 +12,12 @@
 
 namespace emf::io {
 
-/// A PLY file being written from a stream of vertices and triangles (a MeshSink). The pieces
-/// go to two temporary files next to `path`; commit() writes the header with the final counts,
-/// the vertices and the triangles to a temporary file, fsyncs it and renames it over `path`.
-/// Destroying it without commit() removes every temporary file and leaves `path` untouched.
+/// A PLY file being written from a stream of vertices and triangles (a MeshSink). Vertices go
+/// straight into the temporary file of an AtomicOutputFile behind a reserved header; triangles
+/// into a second, already unlinked temporary file next to it (so nothing is left behind even on a
+/// crash); commit() appends the triangles, writes the header with the final counts (padded to
+/// the reserved size by a comment line), fsyncs and renames over `path`. Disk: the PLY plus its
+/// triangles once more. Destroying it without commit() leaves `path` untouched and no files.
 class PlyWriter : public map::MeshSink {
  public:
   /// Throws IoError naming `path` when the temporary files cannot be created there.
@@ -34,10 +36,11 @@ class PlyWriter : public map::MeshSink {
   size_t triangleCount() const { return triangles_; }
 
  private:
-  class Part;
+  class FacePart;
   std::string path_;
   bool binary_;
-  std::unique_ptr<Part> vertex_part_, face_part_;
+  std::unique_ptr<AtomicOutputFile> out_;
+  std::unique_ptr<FacePart> faces_;
   size_t vertices_ = 0, triangles_ = 0;
   std::string buffer_;  // one batch, encoded
 };

@@ -8,122 +8,11 @@
 #include <unordered_map>
 
 #include "common/error.h"
+#include "map/cube_polygons.h"
 
 namespace emf::map {
 
 namespace {
-
-/// Cube topology: corners n = x + 2y + 4z; edge e joins corners kEdge[e][0] < kEdge[e][1],
-/// which differ in bit kEdgeAxis[e].
-struct CubeTopology {
-  int edge[12][2];
-  int edge_axis[12];
-  int edge_of[8][8];
-  int face[6][4];  // corners counter-clockwise seen from outside the cube
-
-  CubeTopology() {
-    for (auto& row : edge_of) {
-      for (int& e : row) e = -1;
-    }
-    int e = 0;
-    for (int a = 0; a < 3; ++a) {
-      for (int c = 0; c < 8; ++c) {
-        if (c & (1 << a)) continue;
-        edge[e][0] = c;
-        edge[e][1] = c | (1 << a);
-        edge_axis[e] = a;
-        edge_of[c][c | (1 << a)] = e;
-        edge_of[c | (1 << a)][c] = e;
-        ++e;
-      }
-    }
-    // Face normal +-e_a; (u, w, a) is a cyclic permutation, so e_u x e_w = e_a and the walk
-    // (0,0) (1,0) (1,1) (0,1) in (u, w) turns counter-clockwise around +e_a.
-    static const int kCcw[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-    int f = 0;
-    for (int a = 0; a < 3; ++a) {
-      const int u = (a + 1) % 3, w = (a + 2) % 3;
-      for (int s = 0; s < 2; ++s) {
-        for (int i = 0; i < 4; ++i) {
-          // Outward -e_a (s = 0) walks the other way round.
-          const int k = s == 1 ? i : (4 - i) % 4;
-          face[f][i] = (s << a) | (kCcw[k][0] << u) | (kCcw[k][1] << w);
-        }
-        ++f;
-      }
-    }
-  }
-};
-
-const CubeTopology& topology() {
-  static const CubeTopology t;
-  return t;
-}
-
-struct Crossing {
-  int edge;
-  bool entering;  // the counter-clockwise walk goes from outside (psi >= 0) to inside
-};
-
-/// Closed loops of crossing edges of one cube (max 4 loops of up to 12 edges). Returns the
-/// number of loops; loop i has lengths[i] edges in loops[i]. simple[i] is false when two of the
-/// loop's segments lie on the same cube face: a fan from one of its vertices could then put a
-/// diagonal on that face, where the neighbouring cube may put the same one.
-int cubeLoops(const float f[8], int loops[4][12], int lengths[4], bool simple[4]) {
-  const CubeTopology& topo = topology();
-  int next[12];
-  int segment_face[12];
-  for (int& n : next) n = -1;
-  for (int fi = 0; fi < 6; ++fi) {
-    const auto& face = topo.face[fi];
-    Crossing x[4];
-    int nx = 0;
-    for (int i = 0; i < 4; ++i) {
-      const int a = face[i], b = face[(i + 1) % 4];
-      const bool in_a = f[a] < 0.0f, in_b = f[b] < 0.0f;
-      if (in_a != in_b) x[nx++] = Crossing{topo.edge_of[a][b], in_b};
-    }
-    if (nx == 2) {
-      const Crossing& en = x[0].entering ? x[0] : x[1];
-      const Crossing& le = x[0].entering ? x[1] : x[0];
-      next[en.edge] = le.edge;
-      segment_face[en.edge] = fi;
-    } else if (nx == 4) {
-      // Inside corners joined through the face centre when its (bilinear) value is inside.
-      const float centre = 0.25f * (f[face[0]] + f[face[1]] + f[face[2]] + f[face[3]]);
-      const bool inside_connected = centre < 0.0f;
-      for (int i = 0; i < 4; ++i) {
-        if (!x[i].entering) continue;
-        const int j = inside_connected ? (i + 3) % 4 : (i + 1) % 4;
-        next[x[i].edge] = x[j].edge;
-        segment_face[x[i].edge] = fi;
-      }
-    }
-  }
-  bool used[12] = {false};
-  int count = 0;
-  for (int start = 0; start < 12 && count < 4; ++start) {
-    if (next[start] < 0 || used[start]) continue;
-    int len = 0;
-    int e = start;
-    bool closed = false;
-    int faces_seen = 0;
-    simple[count] = true;
-    while (len < 12 && e >= 0 && !used[e]) {
-      used[e] = true;
-      if (faces_seen & (1 << segment_face[e])) simple[count] = false;
-      faces_seen |= 1 << segment_face[e];
-      loops[count][len++] = e;
-      e = next[e];
-      if (e == start) {
-        closed = true;
-        break;
-      }
-    }
-    if (closed && len >= 3) lengths[count++] = len;
-  }
-  return count;
-}
 
 /// Streams the mesh of a volume to a MeshSink one z-layer of blocks at a time.
 ///
@@ -147,7 +36,7 @@ class MeshStreamer {
         t_(T_world_volume.translation().cast<float>()) {}
 
   void run() {
-    const CubeTopology& topo = topology();
+    const CubeTopology& topo = cubeTopology();
     const Eigen::Vector3i dims = view_.dims_blocks;
     const int64_t blocks = static_cast<int64_t>(dims.x()) * dims.y() * dims.z();
     const int64_t layer_blocks = static_cast<int64_t>(dims.x()) * dims.y();
@@ -222,7 +111,7 @@ class MeshStreamer {
   }
 
   void meshCube(const Eigen::Vector3i& v0, const float f[8]) {
-    const CubeTopology& topo = topology();
+    const CubeTopology& topo = cubeTopology();
     const float vs = view_.voxel_size_m;
     int loops[4][12];
     int lengths[4];
@@ -281,6 +170,11 @@ class MeshStreamer {
       if (k < end) keys.push_back(k);
     }
     std::sort(keys.begin(), keys.end());
+    if (keys.size() > static_cast<size_t>(std::numeric_limits<int32_t>::max() - next_index_)) {
+      throw ResourceError(
+          "mesh extraction: more than 2^31 - 1 vertices (PLY and emf_mesh "
+          "indices are 32-bit); extract a smaller volume");
+    }
     done_prev_ = std::move(done_);
     done_.clear();
     positions_.clear();

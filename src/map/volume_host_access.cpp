@@ -16,7 +16,10 @@ VolumeHostAccess::VolumeHostAccess(const Volume& volume, bool allow_mapping)
     : T_world_volume_(volume.T_world_volume()), T_volume_initial_(volume.T_volume_initial()) {
   const VoxelPool& pool = volume.pool();
   const cl::Context& ctx = pool.context();
-  mapped_ = allow_mapping && ctx.device().host_unified_memory;
+  // Mapped only on CPU devices, whose buffers are host memory: there a map costs nothing. An
+  // integrated GPU may copy a buffer that was not allocated for host access on map, and the
+  // pool would be copied whole; there the used blocks are downloaded instead.
+  mapped_ = allow_mapping && ctx.device().type == "cpu" && ctx.device().host_unified_memory;
   if (!mapped_) {
     copy_ = std::make_unique<VolumeHostData>(volume.download());
     view_ = copy_->view();

@@ -1,8 +1,9 @@
 // Read-only host access to a volume for mesh extraction and other whole-volume reads on the
-// host. On a device whose memory is the host's (CL_DEVICE_HOST_UNIFIED_MEMORY: CPU devices
-// such as PoCL, integrated GPUs) the index grids and the voxel pool are mapped, not copied: a
-// 20000-block background is 41 MiB of voxels that Volume::download() would duplicate. On other
-// devices the volume's blocks are downloaded (VolumeHostData, compact).
+// host. On a CPU device (PoCL; CL_DEVICE_HOST_UNIFIED_MEMORY) the index grids and the voxel pool
+// are mapped, not copied: a 20000-block background is 41 MiB of voxels that Volume::download()
+// would duplicate. On other devices (GPUs, integrated ones included: their map of a buffer not
+// allocated for host access may copy the whole pool) the volume's used blocks are downloaded
+// (VolumeHostData, compact).
 //
 // Hold it only between frames: the volume must not be changed while it lives (the mapped
 // buffers are the live ones), and the queue is used from the calling thread.
@@ -22,7 +23,7 @@ namespace emf::map {
 
 class VolumeHostAccess {
  public:
-  /// Maps (host-unified memory) or downloads `volume`. Throws ClError / ResourceError.
+  /// Maps (CPU device) or downloads `volume`. Throws ClError / ResourceError.
   explicit VolumeHostAccess(const Volume& volume);
   /// Always downloads (tests compare both ways).
   static VolumeHostAccess downloaded(const Volume& volume);

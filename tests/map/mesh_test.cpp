@@ -2,14 +2,18 @@
 // watertightness (ambiguous faces included); PLY binary and ASCII; point-to-mesh distance.
 #include "map/mesh.h"
 
+#include <algorithm>
+#include <array>
 #include <filesystem>
 #include <fstream>
+#include <locale>
 #include <map>
 #include <random>
 
 #include "common/error.h"
 #include "io/ply.h"
 #include "map/mesh_distance.h"
+#include "mesh_reference.h"
 #include "test_support.h"
 
 namespace emf::test {
@@ -244,6 +248,147 @@ TEST(Mesh, StreamedPlyEqualsTheMeshInMemoryAcrossBlockLayers) {
     EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
   }
   EXPECT_EQ(files, 2);
+}
+
+/// Triangles as their three vertices (position, normal), each started at its smallest vertex
+/// (the winding kept), sorted: equal for equal meshes whatever the vertex order.
+std::vector<std::array<float, 18>> canonicalTriangles(const map::Mesh& m) {
+  std::vector<std::array<float, 18>> out;
+  for (const Eigen::Vector3i& t : m.triangles) {
+    std::array<std::array<float, 6>, 3> v;
+    for (int c = 0; c < 3; ++c) {
+      const Eigen::Vector3f& p = m.vertices[static_cast<size_t>(t[c])];
+      const Eigen::Vector3f& n = m.normals[static_cast<size_t>(t[c])];
+      v[static_cast<size_t>(c)] = {p.x(), p.y(), p.z(), n.x(), n.y(), n.z()};
+    }
+    const size_t first = static_cast<size_t>(std::min_element(v.begin(), v.end()) - v.begin());
+    std::array<float, 18> row;
+    for (size_t c = 0; c < 3; ++c) {
+      std::copy(v[(first + c) % 3].begin(), v[(first + c) % 3].end(), row.begin() + 6 * c);
+    }
+    out.push_back(row);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+TEST(Mesh, StreamedExtractionEqualsTheNonStreamingReference) {
+  // Random volumes: 1-4 blocks per axis, blocks missing (whole z-layers too), slots in random
+  // order, smooth fields with noise, saturated (truncated) regions, unobserved voxels, counts
+  // with foreground-only meshing, min_weight, random poses. The streamed extraction must give
+  // the reference's triangles on the reference's vertices (positions and normals bit-equal).
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.f, 1.f);
+  size_t total_triangles = 0, with_counts = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    map::VolumeHostData h;
+    h.dims_blocks =
+        Eigen::Vector3i(1 + static_cast<int>(rng() % 4), 1 + static_cast<int>(rng() % 4),
+                        1 + static_cast<int>(rng() % 4));
+    h.voxel_size_m = 0.01f;
+    h.truncation_m = 0.04f;
+    const int n = h.dims_blocks.prod();
+    const bool counts = trial % 3 == 0;
+    const int skipped_layer = u(rng) < 0.4f ? static_cast<int>(rng() % 4) : -1;
+    std::vector<int> lins;
+    for (int lin = 0; lin < n; ++lin) {
+      if (map::blockCoords(h.dims_blocks, lin).z() == skipped_layer || u(rng) < 0.2f) continue;
+      lins.push_back(lin);
+    }
+    std::vector<int> slots(lins.size() * (counts ? 2 : 1));
+    for (size_t i = 0; i < slots.size(); ++i) slots[i] = static_cast<int>(i);
+    std::shuffle(slots.begin(), slots.end(), rng);
+    h.index.assign(static_cast<size_t>(n), -1);
+    if (counts) h.count_index.assign(static_cast<size_t>(n), -1);
+    h.voxels.resize(slots.size() * map::kBlockVoxels);
+    // Field: three spheres of random centre and radius, noise, clamped to +-1 (truncation).
+    Eigen::Vector3f centre[3];
+    float radius[3];
+    const Eigen::Vector3f ext = h.dims_blocks.cast<float>() * 0.08f;
+    for (int k = 0; k < 3; ++k) {
+      centre[k] = Eigen::Vector3f(u(rng), u(rng), u(rng)).cwiseProduct(ext);
+      radius[k] = 0.02f + 0.1f * u(rng);
+    }
+    const float noise = trial % 2 ? 0.3f : 0.0f;
+    for (size_t b = 0; b < lins.size(); ++b) {
+      const int lin = lins[b];
+      h.index[static_cast<size_t>(lin)] = slots[b];
+      if (counts) h.count_index[static_cast<size_t>(lin)] = slots[lins.size() + b];
+      const Eigen::Vector3i base = map::blockCoords(h.dims_blocks, lin) * map::kBlockSize;
+      for (int i = 0; i < map::kBlockVoxels; ++i) {
+        const Eigen::Vector3i v = base + Eigen::Vector3i(i % 8, (i / 8) % 8, i / 64);
+        const Eigen::Vector3f p = (v.cast<float>() + Eigen::Vector3f::Constant(0.5f)) * 0.01f;
+        float d = 1e9f;
+        for (int k = 0; k < 3; ++k) d = std::min(d, (p - centre[k]).norm() - radius[k]);
+        const float tsdf = std::clamp(d / h.truncation_m + noise * (u(rng) - 0.5f), -1.f, 1.f);
+        const float weight = u(rng) < 0.03f ? 0.f : 1.f + 9.f * u(rng);
+        h.voxels[static_cast<size_t>(slots[b]) * map::kBlockVoxels + static_cast<size_t>(i)] =
+            map::Voxel::make(tsdf, weight);
+        if (counts) {
+          h.voxels[static_cast<size_t>(slots[lins.size() + b]) * map::kBlockVoxels +
+                   static_cast<size_t>(i)] =
+              map::addCounts(map::Voxel{}, p.x() < ext.x() / 2 ? 0.9f : 0.2f);
+        }
+      }
+    }
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::AngleAxisd(6.0 * u(rng), Eigen::Vector3d(u(rng), u(rng), 1).normalized())
+                     .toRotationMatrix();
+    T.translation() = Eigen::Vector3d(u(rng), u(rng), u(rng));
+    map::MeshOptions opt;
+    opt.world_frame = trial % 4 != 1;
+    opt.min_weight = trial % 5 == 2 ? 4.f : 0.f;
+    opt.skip_truncated_crossings = trial % 7 != 3;
+    const map::Mesh streamed = map::extractMesh(h.view(), T, opt);
+    const map::Mesh reference = extractMeshReference(h.view(), T, opt);
+    ASSERT_EQ(streamed.vertices.size(), reference.vertices.size()) << "trial " << trial;
+    ASSERT_EQ(streamed.triangles.size(), reference.triangles.size()) << "trial " << trial;
+    ASSERT_TRUE(canonicalTriangles(streamed) == canonicalTriangles(reference)) << "trial " << trial;
+    total_triangles += streamed.triangles.size();
+    with_counts += counts ? streamed.triangles.size() : 0;
+  }
+  EXPECT_GT(total_triangles, 30000u);  // 37500 with this seed
+  EXPECT_GT(with_counts, 5000u) << with_counts;
+}
+
+TEST(Mesh, PlyIgnoresTheHostProgramsLocale) {
+  // A host program with a global locale that groups digits ("1,234") must still get a PLY
+  // header other programs (and readPly) can read.
+  struct Grouping : std::numpunct<char> {
+    char do_thousands_sep() const override { return ','; }
+    std::string do_grouping() const override { return "\3"; }
+  };
+  const map::VolumeHostData h = filledVolume(
+      Eigen::Vector3i(3, 3, 3), 0.01f, 0.05f, [](const Eigen::Vector3f& p, const Eigen::Vector3i&) {
+        return (p - Eigen::Vector3f(0.12f, 0.12f, 0.12f)).norm() - 0.1f;
+      });
+  const map::Mesh m = map::extractMesh(h);
+  ASSERT_GT(m.vertices.size(), 1000u);
+  const std::string dir = tempDir("ply-locale");
+  const std::locale before = std::locale::global(std::locale(std::locale::classic(), new Grouping));
+  std::vector<map::Mesh> read;
+  std::string header;
+  try {
+    for (bool binary : {true, false}) {
+      const std::string path = dir + (binary ? "/g_bin.ply" : "/g_ascii.ply");
+      io::writePly(path, m, binary);
+      read.push_back(io::readPly(path));
+      std::ifstream in(path);
+      std::string line;
+      while (std::getline(in, line) && line != "end_header") header += line + "\n";
+    }
+  } catch (...) {
+    std::locale::global(before);
+    throw;
+  }
+  std::locale::global(before);
+  EXPECT_NE(header.find("element vertex " + std::to_string(m.vertices.size()) + "\n"),
+            std::string::npos)
+      << header;
+  for (const map::Mesh& r : read) {
+    ASSERT_EQ(r.vertices.size(), m.vertices.size());
+    EXPECT_EQ(r.triangles, m.triangles);
+  }
 }
 
 TEST(MeshDistanceTest, MatchesBruteForce) {
