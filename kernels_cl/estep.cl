@@ -12,73 +12,20 @@
 // at the point (0 outside the volume), the background q_0 = 1 - max_i q_i; no SDF residual
 // term. `sum` then holds the largest object p_fg.
 //
-// Host sequence per E-step: estep_likelihood once per volume (first = 1 for the first volume,
+// Host sequence per E-step: estep_likelihood16 once per volume (first = 1 for the first volume,
 // which initialises the running sum, the best likelihood and the residual), then
 // estep_normalize once per volume. Pixels without a valid vertex get q = 0 for every volume
 // and residual NaN; pixels no volume contains also get q = 0.
 #include "map_common.clh"
 
-__kernel void estep_likelihood(__global const float4* vertex, const int count, const float4 r0,
-                               const float4 r1, const float4 r2, __global const int* index,
-                               __global const int* count_index, const int has_counts,
-                               const int4 dims, __global const short2* voxels,
-                               const float voxel_size, const float truncation, const float sigma,
-                               const float alpha, const float p_uniform, const float min_weight,
-                               const int pfg_mode, const int first, __global float* likelihood,
-                               __global float* sum, __global float* best,
-                               __global float* residual) {
-  const int u = get_global_id(0);
-  if (u >= count) return;
-  const float4 p4 = vertex[u];
-  float lik = 0.0f;
-  float abs_psi = NAN;
-  if (p4.w != 0.0f) {
-    const float3 p = emf_transform(r0, r1, r2, p4.xyz);
-    const float3 extent = (float3)((float)(dims.x * EMF_BLOCK), (float)(dims.y * EMF_BLOCK),
-                                   (float)(dims.z * EMF_BLOCK)) *
-                          voxel_size;
-    if (p.x >= 0.0f && p.y >= 0.0f && p.z >= 0.0f && p.x < extent.x && p.y < extent.y &&
-        p.z < extent.z) {
-      float weight = 0.0f;
-      float3 gradient;
-      const float psi =
-          emf_sample_sdf(index, dims, voxels, voxel_size, truncation, p, &weight, &gradient);
-      abs_psi = (emf_is_valid(psi) && weight >= min_weight) ? fabs(psi) : truncation;
-      const float pfg =
-          has_counts ? emf_sample_pfg(count_index, dims, voxels, voxel_size, p) : 1.0f;
-      lik = alpha / (2.0f * sigma) * exp(-abs_psi / sigma) * pfg + (1.0f - alpha) * p_uniform;
-      if (pfg_mode) lik = has_counts ? pfg : 1.0f;
-    }
-  }
-  likelihood[u] = lik;
-  if (pfg_mode) {
-    if (first) {
-      sum[u] = 0.0f;
-      residual[u] = abs_psi;
-    } else {
-      sum[u] = fmax(sum[u], lik);
-    }
-    return;
-  }
-  if (first) {
-    sum[u] = lik;
-    best[u] = lik;
-    residual[u] = lik > 0.0f ? abs_psi : NAN;
-  } else {
-    sum[u] += lik;
-    if (lik > best[u]) {
-      best[u] = lik;
-      residual[u] = abs_psi;
-    }
-  }
-}
-
-/// estep_likelihood for a volume without counts (p_fg = 1: the background), 16 consecutive
-/// pixels per work item in float16 lanes (explicit SIMD through emf_sample_sdf16, like
-/// track_accumulate: PoCL keeps the per-pixel kernel scalar). Per lane it computes what
-/// estep_likelihood does.
+/// The likelihood of one volume for 16 consecutive pixels per work item, in float16 lanes
+/// (explicit SIMD through emf_sample_sdf16 / emf_sample_pfg16, like track_accumulate: PoCL
+/// keeps a per-pixel kernel scalar). Per lane: the formula above, as em::associationLikelihood.
+/// Sixteen pixels none of which falls in the volume (most of the image for a small object) skip
+/// the sampling.
 __kernel void estep_likelihood16(__global const float4* vertex, const int count, const float4 r0,
                                  const float4 r1, const float4 r2, __global const int* index,
+                                 __global const int* count_index, const int has_counts,
                                  const int4 dims, __global const short2* voxels,
                                  const float voxel_size, const float truncation, const float sigma,
                                  const float alpha, const float p_uniform, const float min_weight,
@@ -106,15 +53,22 @@ __kernel void estep_likelihood16(__global const float4* vertex, const int count,
                         voxel_size;
   const int16 inside = (pw != 0.0f) & (x >= 0.0f) & (y >= 0.0f) & (z >= 0.0f) & (x < extent.x) &
                        (y < extent.y) & (z < extent.z);
-  float16 weight, gx, gy, gz;
-  const float16 psi = emf_sample_sdf16(index, dims, voxels, voxel_size, truncation, x, y, z,
-                                       &weight, &gx, &gy, &gz);
-  const float16 abs_psi_in = (!isnan(psi) & (weight >= min_weight)) ? fabs(psi) : truncation;
-  const float16 lik_in =
-      pfg_mode ? (float16)1.0f
-               : alpha / (2.0f * sigma) * exp(-abs_psi_in / sigma) + (1.0f - alpha) * p_uniform;
-  const float16 lik = inside ? lik_in : 0.0f;
-  const float16 abs_psi = inside ? abs_psi_in : NAN;
+  float16 lik = 0.0f;
+  float16 abs_psi = NAN;
+  if (any(inside)) {
+    float16 weight, gx, gy, gz;
+    const float16 psi = emf_sample_sdf16(index, dims, voxels, voxel_size, truncation, x, y, z,
+                                         &weight, &gx, &gy, &gz);
+    const float16 abs_psi_in = (!isnan(psi) & (weight >= min_weight)) ? fabs(psi) : truncation;
+    const float16 pfg =
+        has_counts ? emf_sample_pfg16(count_index, dims, voxels, voxel_size, x, y, z) : 1.0f;
+    const float16 lik_in =
+        pfg_mode ? (has_counts ? pfg : (float16)1.0f)
+                 : alpha / (2.0f * sigma) * exp(-abs_psi_in / sigma) * pfg +
+                       (1.0f - alpha) * p_uniform;
+    lik = inside ? lik_in : 0.0f;
+    abs_psi = inside ? abs_psi_in : NAN;
+  }
 #define ESTEP_STORE(l)                            \
   if (base + 0x##l < count) {                     \
     const int u = base + 0x##l;                   \

@@ -98,7 +98,6 @@ EStep::EStep(cl::Context& ctx, const EmOptions& options, int width, int height, 
   sum_ = ctx.buffer(CL_MEM_READ_WRITE, bytes);
   best_ = ctx.buffer(CL_MEM_READ_WRITE, bytes);
   residual_ = ctx.buffer(CL_MEM_READ_WRITE, bytes);
-  likelihood_ = ctx.kernel("estep", "estep_likelihood");
   likelihood16_ = ctx.kernel("estep", "estep_likelihood16");
   normalize_ = ctx.kernel("estep", "estep_normalize");
 }
@@ -120,24 +119,15 @@ void EStep::compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes) 
     const cl_int4 dims = {
         {v.view.dims_blocks.x(), v.view.dims_blocks.y(), v.view.dims_blocks.z(), 0}};
     const cl_int has_counts = v.count_index != nullptr ? 1 : 0;
-    if (!has_counts) {  // the background: 16 pixels per work item
-      cl::setArgs(likelihood16_, vertex_map, count, rows[0], rows[1], rows[2], v.view.index, dims,
-                  v.view.voxels, v.view.voxel_size_m, v.view.truncation_m,
-                  static_cast<float>(options_.sigma_m), static_cast<float>(options_.alpha),
-                  static_cast<float>(options_.p_uniform), static_cast<float>(options_.min_weight),
-                  pfg_mode, static_cast<cl_int>(i == 0 ? 1 : 0), q_[i].get(), sum_.get(),
-                  best_.get(), residual_.get());
-      cl::enqueue(ctx_.queue(), likelihood16_, static_cast<size_t>((count + 15) / 16), 0, 0, 64);
-      continue;
-    }
-    cl::setArgs(likelihood_, vertex_map, count, rows[0], rows[1], rows[2], v.view.index,
+    // 16 pixels per work item.
+    cl::setArgs(likelihood16_, vertex_map, count, rows[0], rows[1], rows[2], v.view.index,
                 has_counts ? v.count_index : v.view.index, has_counts, dims, v.view.voxels,
                 v.view.voxel_size_m, v.view.truncation_m, static_cast<float>(options_.sigma_m),
                 static_cast<float>(options_.alpha), static_cast<float>(options_.p_uniform),
                 static_cast<float>(options_.min_weight), pfg_mode,
                 static_cast<cl_int>(i == 0 ? 1 : 0), q_[i].get(), sum_.get(), best_.get(),
                 residual_.get());
-    cl::enqueue(ctx_.queue(), likelihood_, static_cast<size_t>(count), 0, 0, 64);
+    cl::enqueue(ctx_.queue(), likelihood16_, static_cast<size_t>((count + 15) / 16), 0, 0, 64);
   }
   for (size_t i = 0; i < volumes.size(); ++i) {
     cl::setArgs(normalize_, q_[i].get(), sum_.get(), count, pfg_mode,

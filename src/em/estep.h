@@ -32,7 +32,7 @@ struct EStepHostVolume {
 };
 
 /// Likelihood p(u | i) of one camera-frame point for one volume (0 outside its grid), the CPU
-/// mirror of estep_likelihood. *abs_psi receives |psi| used (NaN outside).
+/// mirror of estep_likelihood16 (per lane). *abs_psi receives |psi| used (NaN outside).
 float associationLikelihood(const EStepHostVolume& volume, const Eigen::Vector3f& p_camera,
                             const EmOptions& options, float* abs_psi);
 
@@ -71,7 +71,7 @@ class EStep {
   int width_, height_;
   std::vector<cl::MemHandle> q_;
   cl::MemHandle sum_, best_, residual_;
-  cl::KernelHandle likelihood_, likelihood16_, normalize_;
+  cl::KernelHandle likelihood16_, normalize_;
   int count_ = 0;
 };
 
