@@ -28,14 +28,15 @@ __kernel void sample_sdf_points(__global const int* index, __global const int* c
   pfg_out[i] = has_counts ? emf_sample_pfg(count_index, dims, voxels, voxel_size, p) : 1.0f;
 }
 
-// The same through emf_sample_sdf16 (16 points per work item, explicit SIMD; what
-// track_accumulate uses): psi, weight and gradient as above, p_fg not sampled. Launch
-// ceil(count / 16) work items.
-__kernel void sample_sdf_points16(__global const int* index, const int4 dims,
+// The same through emf_sample_sdf16 and emf_sample_pfg16 (16 points per work item, explicit
+// SIMD; what track_accumulate and estep_likelihood16 use). Launch ceil(count / 16) work items.
+__kernel void sample_sdf_points16(__global const int* index, __global const int* count_index,
+                                  const int has_counts, const int4 dims,
                                   __global const short2* voxels, const float voxel_size,
                                   const float truncation, __global const float4* points,
                                   const int count, __global float* psi_out,
-                                  __global float* weight_out, __global float4* gradient_out) {
+                                  __global float* weight_out, __global float4* gradient_out,
+                                  __global float* pfg_out) {
   const int i0 = get_global_id(0) * 16;
   if (i0 >= count) return;
   float16 px, py, pz;
@@ -51,10 +52,13 @@ __kernel void sample_sdf_points16(__global const int* index, const int4 dims,
   float16 weight, gx, gy, gz;
   const float16 psi = emf_sample_sdf16(index, dims, voxels, voxel_size, truncation, px, py, pz,
                                        &weight, &gx, &gy, &gz);
+  const float16 pfg =
+      has_counts ? emf_sample_pfg16(count_index, dims, voxels, voxel_size, px, py, pz) : 1.0f;
 #define SDF16_STORE(l)                                                                  \
   if (i0 + 0x##l < count) {                                                             \
     const bool ok = emf_is_valid(psi.s##l);                                             \
     psi_out[i0 + 0x##l] = psi.s##l;                                                     \
+    pfg_out[i0 + 0x##l] = pfg.s##l;                                                     \
     weight_out[i0 + 0x##l] = ok ? weight.s##l : 0.0f;                                   \
     gradient_out[i0 + 0x##l] =                                                          \
         ok ? (float4)(gx.s##l, gy.s##l, gz.s##l, 0.0f) : (float4)(NAN, NAN, NAN, 0.0f); \

@@ -22,7 +22,7 @@ class SdfSampling : public MapTest {
     std::vector<cl_float4> grad;
   };
   /// psi, weight, gradient and p_fg at `pts` through sample_sdf_points (SdfSampler), or with
-  /// `lanes16` through emf_sample_sdf16 (kernel sample_sdf_points16; no p_fg).
+  /// `lanes16` through emf_sample_sdf16 / emf_sample_pfg16 (kernel sample_sdf_points16).
   Samples sampleOnDevice(const map::Volume& vol, const std::vector<Eigen::Vector3f>& pts,
                          bool lanes16 = false) {
     const int n = static_cast<int>(pts.size());
@@ -36,10 +36,10 @@ class SdfSampling : public MapTest {
     if (lanes16) {
       cl::KernelHandle k = ctx().kernel("sdf_sample", "sample_sdf_points16");
       const map::VolumeSpec& spec = vol.spec();
-      cl::setArgs(k, vol.index(), vol.dimsBlocks(), vol.pool().voxels(),
-                  static_cast<cl_float>(spec.voxel_size_m),
+      cl::setArgs(k, vol.index(), vol.countIndex(), static_cast<cl_int>(spec.has_counts ? 1 : 0),
+                  vol.dimsBlocks(), vol.pool().voxels(), static_cast<cl_float>(spec.voxel_size_m),
                   static_cast<cl_float>(spec.truncation_m), dp, static_cast<cl_int>(n), dpsi, dw,
-                  dg);
+                  dg, dpfg);
       cl::enqueue(ctx().queue(), k, static_cast<size_t>((n + 15) / 16));
     } else {
       map::SdfSampler sampler(ctx());
@@ -52,10 +52,8 @@ class SdfSampling : public MapTest {
     ctx().read(dpsi, s.psi.data(), pts.size() * sizeof(float));
     ctx().read(dw, s.weight.data(), pts.size() * sizeof(float));
     ctx().read(dg, s.grad.data(), pts.size() * sizeof(cl_float4));
-    if (!lanes16) {
-      s.pfg.resize(pts.size());
-      ctx().read(dpfg, s.pfg.data(), pts.size() * sizeof(float));
-    }
+    s.pfg.resize(pts.size());
+    ctx().read(dpfg, s.pfg.data(), pts.size() * sizeof(float));
     return s;
   }
 
@@ -111,8 +109,34 @@ TEST_F(SdfSampling, DeviceMatchesReferenceAcrossBlockBorders) {
   }
   const map::VolumeHostData h = vol.download();
   const Eigen::Vector3f centre_v = (T_wv.inverse() * s.centre_w).cast<float>();
-  const std::vector<Eigen::Vector3f> pts =
+  std::vector<Eigen::Vector3f> pts =
       testPoints(centre_v, static_cast<float>(s.radius_m), spec.voxel_size_m, 4000);
+  // Grid-border points: in allocated count blocks on a face of the grid, moved to within +-1.5
+  // voxels of that face (corners at -1 or beyond the last voxel count zero).
+  const size_t n_inner = pts.size();
+  {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(0.f, 1.f);
+    const Eigen::Vector3i dims = h.dims_blocks;
+    const float block_m = spec.voxel_size_m * map::kBlockSize;
+    for (size_t b = 0; b < h.count_index.size(); ++b) {
+      if (h.count_index[b] < 0) continue;
+      const Eigen::Vector3i bc = map::blockCoords(dims, static_cast<int>(b));
+      for (int axis = 0; axis < 3; ++axis) {
+        for (const bool high : {false, true}) {
+          if (bc[axis] != (high ? dims[axis] - 1 : 0)) continue;
+          for (int j = 0; j < 20; ++j) {
+            Eigen::Vector3f p =
+                (bc.cast<float>() + Eigen::Vector3f(u(rng), u(rng), u(rng))) * block_m;
+            const float face = high ? static_cast<float>(dims[axis]) * block_m : 0.f;
+            p[axis] = face + (u(rng) * 3.f - 1.5f) * spec.voxel_size_m;
+            pts.push_back(p);
+          }
+        }
+      }
+    }
+  }
+  const size_t n_grid_border = pts.size() - n_inner;
   const Samples d = sampleOnDevice(vol, pts);
   const Samples d16 = sampleOnDevice(vol, pts, true);
   int valid = 0, borders_valid = 0;
@@ -122,7 +146,10 @@ TEST_F(SdfSampling, DeviceMatchesReferenceAcrossBlockBorders) {
     const bool ok = map::sampleSdfReference(h.view(), pts[i], &psi, &w, &g);
     ASSERT_EQ(ok, !std::isnan(d.psi[i])) << "point " << i;
     ASSERT_EQ(ok, !std::isnan(d16.psi[i])) << "point " << i << " (16 lanes)";
-    EXPECT_NEAR(d.pfg[i], map::samplePfgReference(h.view(), pts[i]), kPfgTolerance) << i;
+    const float pfg_ref = map::samplePfgReference(h.view(), pts[i]);
+    EXPECT_NEAR(d.pfg[i], pfg_ref, kPfgTolerance) << i;
+    EXPECT_NEAR(d16.pfg[i], pfg_ref, kPfgTolerance) << i << " (16 lanes)";
+    if (i >= n_inner) continue;  // grid-border points: p_fg only
     if (!ok) continue;
     ++valid;
     borders_valid += i >= 4000;
@@ -137,6 +164,7 @@ TEST_F(SdfSampling, DeviceMatchesReferenceAcrossBlockBorders) {
   }
   EXPECT_GT(valid, 2000);
   EXPECT_GT(borders_valid, 500);
+  EXPECT_GT(n_grid_border, 200u);
 }
 
 TEST_F(SdfSampling, SampledSdfIsTheDistanceToTheSurface) {
