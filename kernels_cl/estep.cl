@@ -62,10 +62,9 @@ __kernel void estep_likelihood16(__global const float4* vertex, const int count,
     const float16 abs_psi_in = (!isnan(psi) & (weight >= min_weight)) ? fabs(psi) : truncation;
     const float16 pfg =
         has_counts ? emf_sample_pfg16(count_index, dims, voxels, voxel_size, x, y, z) : 1.0f;
-    const float16 lik_in =
-        pfg_mode ? (has_counts ? pfg : (float16)1.0f)
-                 : alpha / (2.0f * sigma) * exp(-abs_psi_in / sigma) * pfg +
-                       (1.0f - alpha) * p_uniform;
+    const float16 lik_in = pfg_mode ? (has_counts ? pfg : (float16)1.0f)
+                                    : alpha / (2.0f * sigma) * exp(-abs_psi_in / sigma) * pfg +
+                                          (1.0f - alpha) * p_uniform;
     lik = inside ? lik_in : 0.0f;
     abs_psi = inside ? abs_psi_in : NAN;
   }
