@@ -177,16 +177,9 @@ TEST_F(Integration, ForegroundCountsFromDetectionMaskMatchReference) {
   const io::Intrinsics k = testIntrinsics(320, 240);
   const Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   const cv::Mat depth = renderDepth(scene, k, T);
-  const cv::Mat sphere_only = renderSpheres(scene, {1}, k, T);
   // Mask: 1 on the sphere, 0 elsewhere, NaN (occluded, no update) on a vertical strip.
-  cv::Mat mask(k.height, k.width, CV_32FC1);
-  for (int y = 0; y < k.height; ++y) {
-    for (int x = 0; x < k.width; ++x) {
-      const float ds = sphere_only.at<float>(y, x);
-      const bool on_sphere = !std::isnan(ds) && std::abs(ds - depth.at<float>(y, x)) < 1e-4f;
-      mask.at<float>(y, x) = (x >= 100 && x < 104) ? kNaN : (on_sphere ? 1.0f : 0.0f);
-    }
-  }
+  cv::Mat mask = sphereMask(scene, 1, k, T);
+  mask.colRange(100, 104).setTo(kNaN);
   Frame f = makeFrame(depth, k, T, cv::Mat(), mask);
   map::VolumeHostData h;
   EXPECT_EQ(fuseAndCompare(vol, f, &h), 0);

@@ -83,6 +83,21 @@ cv::Mat renderSpheres(const Scene& scene, const std::vector<int>& which, const i
   return render(scene, false, which, k, T_world_camera);
 }
 
+cv::Mat sphereMask(const Scene& scene, int which, const io::Intrinsics& k,
+                   const Eigen::Isometry3d& T_world_camera) {
+  const cv::Mat depth = renderDepth(scene, k, T_world_camera);
+  const cv::Mat sphere_only = renderSpheres(scene, {which}, k, T_world_camera);
+  cv::Mat mask(k.height, k.width, CV_32FC1);
+  for (int y = 0; y < k.height; ++y) {
+    for (int x = 0; x < k.width; ++x) {
+      const float ds = sphere_only.at<float>(y, x);
+      mask.at<float>(y, x) =
+          !std::isnan(ds) && std::abs(ds - depth.at<float>(y, x)) < 1e-4f ? 1.0f : 0.0f;
+    }
+  }
+  return mask;
+}
+
 Eigen::Isometry3d lookAt(const Eigen::Vector3d& position_w, const Eigen::Vector3d& target_w) {
   const Eigen::Vector3d z = (target_w - position_w).normalized();
   Eigen::Vector3d x = Eigen::Vector3d(0, 1, 0).cross(z);  // y down: x = down x forward

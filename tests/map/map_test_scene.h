@@ -36,6 +36,10 @@ cv::Mat renderDepth(const Scene& scene, const io::Intrinsics& k,
 cv::Mat renderSpheres(const Scene& scene, const std::vector<int>& which, const io::Intrinsics& k,
                       const Eigen::Isometry3d& T_world_camera);
 
+/// Detection mask of sphere `which`: 1 where it is the visible surface, 0 elsewhere (CV_32F).
+cv::Mat sphereMask(const Scene& scene, int which, const io::Intrinsics& k,
+                   const Eigen::Isometry3d& T_world_camera);
+
 /// A camera pose: position in the world, looking at `target` (y down).
 Eigen::Isometry3d lookAt(const Eigen::Vector3d& position_w, const Eigen::Vector3d& target_w);
 

@@ -74,15 +74,7 @@ TEST_F(VolumeHostAccessTest, MappedAndDownloadedVolumesGiveTheSameMesh) {
   T_wv.translation() = s.centre_w - Eigen::Vector3d::Constant(0.48);
   map::Volume obj(pool, map::VolumeSpec::object(o, 48, 0.02f), T_wv);
   const cv::Mat depth = renderDepth(scene, k, T0);
-  const cv::Mat sphere_only = renderSpheres(scene, {1}, k, T0);
-  cv::Mat mask(k.height, k.width, CV_32FC1);
-  for (int y = 0; y < k.height; ++y) {
-    for (int x = 0; x < k.width; ++x) {
-      const float ds = sphere_only.at<float>(y, x);
-      mask.at<float>(y, x) =
-          !std::isnan(ds) && std::abs(ds - depth.at<float>(y, x)) < 1e-4f ? 1.0f : 0.0f;
-    }
-  }
+  const cv::Mat mask = sphereMask(scene, 1, k, T0);
   Frame f = makeFrame(depth, k, T0, cv::Mat(), mask);
   obj.fuse(f.input);
   const map::VolumeHostAccess obj_mapped(obj);
