@@ -11,14 +11,6 @@ namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
-map::MapOptions smallOptions() {
-  map::MapOptions o;
-  o.memory_mb = 32;
-  o.background_voxel_m = 0.02;
-  o.background_resolution = 256;  // 5.12 m at 2 cm
-  return o;
-}
-
 class Integration : public MapTest {};
 
 TEST_F(Integration, AllocationMarksTheTruncationBandAsTheReference) {

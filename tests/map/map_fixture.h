@@ -21,6 +21,15 @@ namespace emf::test {
 constexpr int kTsdfToleranceSteps = 1;
 constexpr int kWeightToleranceSteps = 1;
 
+/// A 32 MiB pool and a 5.12 m background at 2 cm (256 voxels): the map tests' usual setting.
+inline map::MapOptions smallOptions() {
+  map::MapOptions o;
+  o.memory_mb = 32;
+  o.background_voxel_m = 0.02;
+  o.background_resolution = 256;
+  return o;
+}
+
 class MapTest : public WithClQueue {
  protected:
   /// A device frame: depth (and optional q / mask) uploaded, intrinsics and pose set.

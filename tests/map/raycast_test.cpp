@@ -41,10 +41,7 @@ Compare compareImages(const cv::Mat& depth, const cv::Mat& normals, const cv::Ma
 class Raycast : public MapTest {};
 
 TEST_F(Raycast, BackgroundMatchesReferenceAndTheScene) {
-  map::MapOptions o;
-  o.memory_mb = 32;
-  o.background_voxel_m = 0.02;
-  o.background_resolution = 256;
+  const map::MapOptions o = smallOptions();
   map::VoxelPool pool(ctx(), o);
   const map::VolumeSpec spec = map::VolumeSpec::background(o);
   const Eigen::Isometry3d T0 = Eigen::Isometry3d::Identity();
@@ -119,10 +116,7 @@ TEST_F(Raycast, BackgroundMatchesReferenceAndTheScene) {
 }
 
 TEST_F(Raycast, SeveralVolumesDepthTestAndForegroundRule) {
-  map::MapOptions o;
-  o.memory_mb = 32;
-  o.background_voxel_m = 0.02;
-  o.background_resolution = 256;
+  const map::MapOptions o = smallOptions();
   map::VoxelPool pool(ctx(), o);
   const Scene scene;
   const map::VolumeSpec bspec = map::VolumeSpec::background(o);

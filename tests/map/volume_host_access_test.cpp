@@ -22,10 +22,7 @@ void expectSameMesh(const map::Mesh& a, const map::Mesh& b) {
 }
 
 TEST_F(VolumeHostAccessTest, MappedAndDownloadedVolumesGiveTheSameMesh) {
-  map::MapOptions o;
-  o.memory_mb = 32;
-  o.background_voxel_m = 0.02;
-  o.background_resolution = 256;
+  const map::MapOptions o = smallOptions();
   map::VoxelPool pool(ctx(), o);
   const Scene scene;
   const io::Intrinsics k = testIntrinsics(320, 240);
