@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <opencv2/imgproc.hpp>
+#include <string>
 
 #include "common/log.h"
 #include "pipeline/slam_system.h"
@@ -349,12 +351,17 @@ bool SlamSystem::createObject(const io::Detection& d, const cv::Mat& vertex) {
 }
 
 void SlamSystem::checkVisibility() {
-  const em::ObjectOptions& opt = config_.objects;
-  // Objects only: visibility is about the projected mask inside the image.
+  const em::ObjectOptions& opt = visibility_options_;  // thresholds at the ray cast's size
+  // Objects only: visibility is about the projected mask inside the image. The cast runs at
+  // objects.visibility_width; q is averaged down to it.
   std::vector<map::RenderItem> items;
   for (const auto& o : objects_) items.push_back({o.volume.get(), o.id, 0.0f});
-  raycaster_.render(items, intrinsics_, T_world_camera_);
-  raycaster_.download(nullptr, nullptr, &last_ids_);
+  raycaster_.render(items, visibility_k_, T_world_camera_);
+  raycaster_.download(nullptr, nullptr, &visibility_ids_);
+  const bool scaled = visibility_k_.width != intrinsics_.width;
+  const std::string at = scaled ? " (ray cast at " + std::to_string(visibility_k_.width) + "x" +
+                                      std::to_string(visibility_k_.height) + ")"
+                                : std::string();
   for (size_t k = objects_.size(); k-- > 0;) {
     const TrackedObject& o = objects_[k];
     if (o.first_frame == frames_) continue;  // created this frame
@@ -364,20 +371,21 @@ void SlamSystem::checkVisibility() {
                           std::to_string(opt.max_lost_frames) + "), its pose is stale");
       continue;
     }
-    if (em::isInvisible(last_ids_, o.id, opt)) {
-      const int visible = em::visiblePixels(last_ids_, o.id, opt);
+    if (em::isInvisible(visibility_ids_, o.id, opt)) {
+      const int visible = em::visiblePixels(visibility_ids_, o.id, opt);
       deleteObject(k, "invisible: " + std::to_string(visible) + " px < " +
-                          std::to_string(opt.invisible_min_px) + " px");
+                          std::to_string(opt.invisible_min_px) + " px" + at);
       continue;
     }
     if (o.state != ObjectState::kTracked || estep_ids_.size() <= 1) continue;
-    const cv::Mat q = estep_.downloadQ(o.e_step_slot);
-    const double mean_q = em::meanAssociation(q, last_ids_, o.id);
+    cv::Mat q = estep_.downloadQ(o.e_step_slot);
+    if (scaled) cv::resize(q, q, visibility_ids_.size(), 0, 0, cv::INTER_AREA);
+    const double mean_q = em::meanAssociation(q, visibility_ids_, o.id);
     if (mean_q < opt.min_mean_association) {
       char reason[96];
       std::snprintf(reason, sizeof(reason), "mean association %.3f < %.3f", mean_q,
                     opt.min_mean_association);
-      deleteObject(k, reason);
+      deleteObject(k, reason + at);
     }
   }
 }

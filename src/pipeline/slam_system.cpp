@@ -69,6 +69,17 @@ const char* objectStateName(ObjectState state) {
   return "?";
 }
 
+namespace {
+/// `o` with its pixel thresholds (given for 640x480 images) scaled to an image `scale` times as
+/// wide: lengths with the scale, areas with its square.
+em::ObjectOptions scaledPixelThresholds(em::ObjectOptions o, double scale) {
+  o.min_detection_px = static_cast<int>(std::lround(o.min_detection_px * scale));
+  o.visibility_border_px = static_cast<int>(std::lround(o.visibility_border_px * scale));
+  o.invisible_min_px = static_cast<int>(std::lround(o.invisible_min_px * scale * scale));
+  return o;
+}
+}  // namespace
+
 const std::vector<std::string>& SlamSystem::stageNames() {
   static const std::vector<std::string> kStages = {
       "preprocess", "estep", "track", "track_objects", "detect", "objects", "integrate"};
@@ -91,12 +102,19 @@ SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrins
       counters_({"track_iterations", "object_track_iterations", "object_track_pixels",
                  "integrated_blocks"},
                 4096) {
-  // Pixel thresholds of the object rules are given for 640x480 images: scale them.
-  const double scale = intrinsics.width / 640.0;
-  em::ObjectOptions& o = config_.objects;
-  o.min_detection_px = static_cast<int>(std::lround(o.min_detection_px * scale));
-  o.visibility_border_px = static_cast<int>(std::lround(o.visibility_border_px * scale));
-  o.invisible_min_px = static_cast<int>(std::lround(o.invisible_min_px * scale * scale));
+  // Pixel thresholds of the object rules are given for 640x480 images: scale them to the frame,
+  // and for the visibility rule to the size of its ray cast.
+  config_.objects = scaledPixelThresholds(config.objects, intrinsics.width / 640.0);
+  const int frame_width = intrinsics_.width;
+  const int vis_width = config.objects.visibility_width > 0
+                            ? std::min(config.objects.visibility_width, frame_width)
+                            : frame_width;
+  const int vis_height =
+      std::max(1, static_cast<int>(std::lround(static_cast<double>(intrinsics_.height) * vis_width /
+                                               frame_width)));
+  visibility_k_ =
+      vis_width == frame_width ? intrinsics_ : intrinsics_.scaled(vis_width, vis_height);
+  visibility_options_ = scaledPixelThresholds(config.objects, vis_width / 640.0);
   if (!config.detector.plugin.empty()) {
     scheduler_ = std::make_unique<DetectorScheduler>(config.detector, source_uri, intrinsics);
   }

@@ -211,7 +211,12 @@ class SlamSystem {
   cv::Mat created_mask_;  // union of the masks of objects created this frame (or empty)
   std::vector<io::Detection> unmatched_;    // this frame's detections that matched nothing
   std::vector<ObjectOutcome> deleted_now_;  // objects deleted in this frame
-  cv::Mat last_ids_;
+  cv::Mat last_ids_;  // object ids ray-cast for the last detection matching (frame size)
+  // The visibility rule's ray cast: its image size (objects.visibility_width), its thresholds
+  // scaled to that size, and its last object ids.
+  io::Intrinsics visibility_k_;
+  em::ObjectOptions visibility_options_;
+  cv::Mat visibility_ids_;
   int next_object_id_ = 1;
   std::function<void(const TrackedObject&)> deletion_hook_;
   std::unique_ptr<DetectorScheduler> scheduler_;  // null without a detector plugin

@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <utility>
 
 #include "common/error.h"
 #include "io/synth/parallel.h"
@@ -120,8 +121,11 @@ RenderOptions renderOptions(const SynthOptions& o) {
 }  // namespace
 
 SynthSource::SynthSource(const SynthOptions& options)
+    : SynthSource(options, makePreset(options.preset)) {}
+
+SynthSource::SynthSource(const SynthOptions& options, Scene scene)
     : options_(options),
-      scene_(makePreset(options.preset)),
+      scene_(std::move(scene)),
       renderer_(renderOptions(options)),
       noise_(options.depth_noise) {
   frames_ = options.frames > 0 ? options.frames : scene_.default_frames;

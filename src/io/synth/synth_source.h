@@ -51,6 +51,9 @@ class SynthSource : public FrameSource {
  public:
   /// Throws IoError for an unknown preset, InvalidArgument for a bad size.
   explicit SynthSource(const SynthOptions& options);
+  /// The caller's own scene instead of a preset (options.preset is ignored): tests and custom
+  /// worlds. options.frames = 0 takes scene.default_frames.
+  SynthSource(const SynthOptions& options, Scene scene);
 
   Intrinsics intrinsics() const override { return renderer_.intrinsics(); }
   bool next(Frame& frame) override;
