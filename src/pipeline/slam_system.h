@@ -146,8 +146,9 @@ class SlamSystem {
   };
   /// Empty when no E-step ran in the last frame (no objects and no detection).
   Associations associations() const;
-  /// Object ids rendered for the last frame (CV_32S, -1 none, 0 background only where the
-  /// last render included it); empty when nothing was rendered.
+  /// Object ids ray-cast (frame size, the background occluding) to match the last detections
+  /// (CV_32S, -1 none, 0 background); all -1 when no object was alive then, empty before the
+  /// first detection. The visibility rule's own cast is smaller (objects.visibility_width).
   const cv::Mat& lastObjectIds() const { return last_ids_; }
   /// Called with each object volume just before it is deleted (outputs save its mesh).
   void setDeletionHook(std::function<void(const TrackedObject&)> hook) {
