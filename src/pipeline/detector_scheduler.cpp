@@ -194,7 +194,23 @@ std::optional<DetectionBatch> DetectorScheduler::submit(const io::Frame& frame,
   }
   const bool due = frame.index % every_n_frames_ == 0;
   if (!async_) {
-    if (!due) return std::nullopt;
+    if (!due) {
+      if (frame.detections && !frame.detections->empty()) {
+        // A dataset labelled on more frames than the schedule runs: the maskfile plugin replays
+        // only the scheduled ones. Said once, counted always (run.json).
+        std::lock_guard<std::mutex> lock(mutex_);
+        ++stats_.labelled_frames_skipped;
+        if (!warned_skipped_labels_) {
+          warned_skipped_labels_ = true;
+          logWarning("frame ", frame.index,
+                     " carries detections from the source, but the detector runs only on every ",
+                     every_n_frames_,
+                     "th frame (detector.every_n_frames), so the maskfile plugin skips this one; "
+                     "set detector.every_n_frames=1 to replay every labelled frame");
+        }
+      }
+      return std::nullopt;
+    }
     // Run on the caller's frame without copying: a const view through a temporary slot would
     // copy the images, so the slot only carries the small fields.
     Slot view;

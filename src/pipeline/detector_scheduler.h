@@ -48,13 +48,16 @@ struct DetectionBatch {
 
 /// Counters of a scheduler (for run.json and the C API's metrics).
 struct DetectorStats {
-  std::string plugin;             // plugin name ("" = none)
-  std::string mode;               // sequential | async
-  int64_t runs = 0;               // detect() calls finished
-  int64_t failures = 0;           // calls that failed as a whole (no detections used)
-  int64_t detections = 0;         // valid detections returned
-  int64_t rejected = 0;           // malformed detections dropped by the host
-  int64_t dropped_frames = 0;     // async: frames not handed over because the detector was busy
+  std::string plugin;          // plugin name ("" = none)
+  std::string mode;            // sequential | async
+  int64_t runs = 0;            // detect() calls finished
+  int64_t failures = 0;        // calls that failed as a whole (no detections used)
+  int64_t detections = 0;      // valid detections returned
+  int64_t rejected = 0;        // malformed detections dropped by the host
+  int64_t dropped_frames = 0;  // async: frames not handed over because the detector was busy
+  /// Sequential: frames that carry the source's own detections (a dataset's masks/) but are not
+  /// on the detector's schedule (detector.every_n_frames), so the maskfile plugin skips them.
+  int64_t labelled_frames_skipped = 0;
   int64_t results_delivered = 0;  // batches returned by submit()/finish()
   double detector_ms_median = 0;  // of the detect() calls (0 when none ran)
   double detector_ms_max = 0;
@@ -146,6 +149,7 @@ class DetectorScheduler {
   bool async_ = false;
   int every_n_frames_ = 30;
   bool warned_source_detections_ = false;
+  bool warned_skipped_labels_ = false;
 
   // Async state. The SLAM thread owns slot_ while busy_ is false; the detector thread owns it
   // (and working_) while busy_ is true. ready_ is guarded by mutex_.

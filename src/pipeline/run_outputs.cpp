@@ -60,6 +60,7 @@ nlohmann::json detectorStatsJson(const DetectorStats& s) {
           {"detections", s.detections},
           {"rejected_detections", s.rejected},
           {"dropped_frames", s.dropped_frames},
+          {"labelled_frames_skipped", s.labelled_frames_skipped},
           {"results_delivered", s.results_delivered},
           {"detector_ms_median", s.detector_ms_median},
           {"detector_ms_max", s.detector_ms_max},

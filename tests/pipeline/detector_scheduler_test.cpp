@@ -165,6 +165,58 @@ TEST(DetectorScheduler, NoPluginIsDisabledAndIgnoresSourceDetections) {
   EXPECT_EQ(s.stats().plugin, "");
 }
 
+TEST(DetectorScheduler, LabelledFramesOffTheScheduleAreCountedAndWarnedOnce) {
+  // A dataset with detections on every frame, replayed every 3rd frame: frames 1, 2, 4, 5, 7
+  // and 8 carry labels the detector never sees. Frames without labels (6: none, 9: an empty
+  // list) are not counted.
+  std::vector<int64_t> calls;
+  DetectorScheduler s(sequential(3), "echo", depthEcho(&calls), smallCamera());
+  io::Detection d;
+  d.class_name = "car";
+  d.score = 1.f;
+  d.box = cv::Rect(0, 0, 4, 4);
+  d.mask = cv::Mat(60, 80, CV_32F, cv::Scalar(1.f));
+  testing::internal::CaptureStderr();
+  for (int64_t i = 0; i < 10; ++i) {
+    io::Frame f = makeFrame(i);
+    if (i == 9) {
+      f.detections = std::vector<io::Detection>{};
+    } else if (i != 6) {
+      f.detections = std::vector<io::Detection>{d};
+    }
+    s.submit(f, poseOf(i));
+  }
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(s.stats().labelled_frames_skipped, 6);
+  EXPECT_EQ(s.stats().runs, 4);
+  EXPECT_EQ(calls, (std::vector<int64_t>{0, 3, 6, 9}));
+  const size_t first = err.find("detector.every_n_frames=1");
+  ASSERT_NE(first, std::string::npos) << err;
+  EXPECT_EQ(err.find("detector.every_n_frames=1", first + 1), std::string::npos)
+      << "warned more than once: " << err;
+  EXPECT_NE(err.find("frame 1 carries detections"), std::string::npos) << err;
+}
+
+TEST(DetectorScheduler, LabelledFramesOnTheScheduleAreNotCounted) {
+  std::vector<int64_t> calls;
+  DetectorScheduler s(sequential(1), "echo", depthEcho(&calls), smallCamera());
+  io::Detection d;
+  d.class_name = "car";
+  d.score = 1.f;
+  d.box = cv::Rect(0, 0, 4, 4);
+  d.mask = cv::Mat(60, 80, CV_32F, cv::Scalar(1.f));
+  testing::internal::CaptureStderr();
+  for (int64_t i = 0; i < 5; ++i) {
+    io::Frame f = makeFrame(i);
+    f.detections = std::vector<io::Detection>{d};
+    s.submit(f, poseOf(i));
+  }
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(s.stats().labelled_frames_skipped, 0);
+  EXPECT_EQ(s.stats().runs, 5);
+  EXPECT_EQ(err.find("every_n_frames"), std::string::npos) << err;
+}
+
 // ---- through the plugin host ---------------------------------------------------------------
 
 DetectorOptions withPlugin(const std::string& name, const std::string& mode = "sequential") {

@@ -49,6 +49,7 @@ TEST_F(RunOutputs, SummaryHasObjectsDetectorAndError) {
   st.plugin = "maskfile";
   st.runs = 2;
   st.dropped_frames = 5;
+  st.labelled_frames_skipped = 29;
   info.detector = st;
   info.error = "stopped after 22 frames: broken";
   const std::string dir = test::tempDir("run-outputs");
@@ -66,6 +67,7 @@ TEST_F(RunOutputs, SummaryHasObjectsDetectorAndError) {
   EXPECT_EQ(j["detector"]["plugin"], "maskfile");
   EXPECT_EQ(j["detector"]["runs"], 2);
   EXPECT_EQ(j["detector"]["dropped_frames"], 5);
+  EXPECT_EQ(j["detector"]["labelled_frames_skipped"], 29);
   EXPECT_EQ(j["error"], "stopped after 22 frames: broken");
   EXPECT_TRUE(std::filesystem::exists(dir + "/camera.txt"));
   EXPECT_TRUE(std::filesystem::exists(dir + "/background.ply"));
