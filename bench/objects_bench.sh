@@ -25,10 +25,13 @@ OUT=out/objects_bench
 PRESETS="cars,occlusion"
 TIMING=0
 SIZES="320x240,640x480"
+need_value() {  # <option> [value]: a usage error unless the option has a non-empty value
+  [[ $# -ge 2 && -n "$2" ]] || { echo "objects_bench: $1 needs a value (see --help)" >&2; exit 2; }
+}
 while [[ $# -gt 0 ]]; do
-  if [[ "$1" != --timing && "$1" != -h && "$1" != --help && ( $# -lt 2 || -z "$2" ) ]]; then
-    echo "objects_bench: $1 needs a value (see --help)" >&2; exit 2
-  fi
+  case "$1" in
+    --sizes|--emf|--frames|--size|--out|--presets) need_value "$@" ;;
+  esac
   case "$1" in
     --timing) TIMING=1; shift ;;
     --sizes) SIZES="$2"; shift 2 ;;
