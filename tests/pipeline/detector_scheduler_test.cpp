@@ -38,6 +38,16 @@ Eigen::Isometry3d poseOf(int64_t index) {
   return T;
 }
 
+// A detection covering the whole 80x60 image, as a source's stored detections.
+io::Detection wholeImageCar() {
+  io::Detection d;
+  d.class_name = "car";
+  d.score = 1.f;
+  d.box = cv::Rect(0, 0, 4, 4);
+  d.mask = cv::Mat(60, 80, CV_32F, cv::Scalar(1.f));
+  return d;
+}
+
 DetectorOptions sequential(int every_n) {
   DetectorOptions o;
   o.mode = "sequential";
@@ -154,11 +164,7 @@ TEST(DetectorScheduler, NoPluginIsDisabledAndIgnoresSourceDetections) {
   DetectorScheduler s(sequential(1), "", smallCamera());
   EXPECT_FALSE(s.enabled());
   io::Frame f = makeFrame(0);
-  io::Detection d;
-  d.class_name = "car";
-  d.score = 1.f;
-  d.box = cv::Rect(0, 0, 4, 4);
-  d.mask = cv::Mat(60, 80, CV_32F, cv::Scalar(1.f));
+  const io::Detection d = wholeImageCar();
   f.detections = std::vector<io::Detection>{d};
   EXPECT_FALSE(s.submit(f, poseOf(0)).has_value());
   EXPECT_EQ(s.stats().runs, 0);
@@ -171,11 +177,7 @@ TEST(DetectorScheduler, LabelledFramesOffTheScheduleAreCountedAndWarnedOnce) {
   // list) are not counted.
   std::vector<int64_t> calls;
   DetectorScheduler s(sequential(3), "echo", depthEcho(&calls), smallCamera());
-  io::Detection d;
-  d.class_name = "car";
-  d.score = 1.f;
-  d.box = cv::Rect(0, 0, 4, 4);
-  d.mask = cv::Mat(60, 80, CV_32F, cv::Scalar(1.f));
+  const io::Detection d = wholeImageCar();
   testing::internal::CaptureStderr();
   for (int64_t i = 0; i < 10; ++i) {
     io::Frame f = makeFrame(i);
@@ -200,11 +202,7 @@ TEST(DetectorScheduler, LabelledFramesOffTheScheduleAreCountedAndWarnedOnce) {
 TEST(DetectorScheduler, LabelledFramesOnTheScheduleAreNotCounted) {
   std::vector<int64_t> calls;
   DetectorScheduler s(sequential(1), "echo", depthEcho(&calls), smallCamera());
-  io::Detection d;
-  d.class_name = "car";
-  d.score = 1.f;
-  d.box = cv::Rect(0, 0, 4, 4);
-  d.mask = cv::Mat(60, 80, CV_32F, cv::Scalar(1.f));
+  const io::Detection d = wholeImageCar();
   testing::internal::CaptureStderr();
   for (int64_t i = 0; i < 5; ++i) {
     io::Frame f = makeFrame(i);
