@@ -18,9 +18,12 @@ map::VolumeDeviceView deviceView(const map::Volume& volume) {
   return v;
 }
 
-track::TrackOptions objectTrackOptions(const Config& config) {
+track::TrackOptions objectTrackOptions(const Config& config, int image_width) {
   track::TrackOptions o = config.track;
   o.huber_truncation_factor = config.objects.huber_truncation_factor;
+  // The data term grows with the pixel count: the prior, given for 640x480, with the area.
+  const double area_scale = (image_width / 640.0) * (image_width / 640.0);
+  o.prior_rotation_weight = config.objects.motion_prior_rotation * area_scale;
   // An object volume is mostly unobserved space around the object, and every pixel inside it
   // has some association q > 0: the fraction of pixels landing on observed map says nothing
   // about the object. Its loss is judged by inliers, conditioning, motion and convergence.
@@ -95,7 +98,8 @@ SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrins
       preprocessor_(ctx, config.preprocess, intrinsics),
       object_preprocessor_(ctx, objectPreprocessOptions(config), intrinsics),
       tracker_(ctx, config.track, intrinsics.width, intrinsics.height),
-      object_tracker_(ctx, objectTrackOptions(config), intrinsics.width, intrinsics.height),
+      object_tracker_(ctx, objectTrackOptions(config, intrinsics.width), intrinsics.width,
+                      intrinsics.height),
       estep_(ctx, config.em, intrinsics.width, intrinsics.height, 1 + config.objects.max_objects),
       raycaster_(ctx, config.map, intrinsics.width, intrinsics.height),
       timer_(stageNames(), 4096),

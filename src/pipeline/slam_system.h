@@ -75,8 +75,9 @@ struct FrameOutcome {
 track::PreprocessOptions objectPreprocessOptions(const Config& config);
 
 /// The tracking options for object volumes: the camera's (track section) with the object rules
-/// below and objects.huber_truncation_factor.
-track::TrackOptions objectTrackOptions(const Config& config);
+/// below, objects.huber_truncation_factor and the rotation prior objects.motion_prior_rotation
+/// (scaled from 640x480 to an image `image_width` pixels wide).
+track::TrackOptions objectTrackOptions(const Config& config, int image_width);
 
 /// The device view of a volume that tracking and the E-step read.
 map::VolumeDeviceView deviceView(const map::Volume& volume);
@@ -201,7 +202,7 @@ class SlamSystem {
   track::Preprocessor preprocessor_;
   track::Preprocessor object_preprocessor_;  // objects.filter_depth off: their own light filter
   track::Tracker tracker_;
-  track::Tracker object_tracker_;  // objectTrackOptions(config)
+  track::Tracker object_tracker_;  // objectTrackOptions(config, width)
   em::EStep estep_;
   map::RayCaster raycaster_;
   cl::MemHandle fg_mask_;      // p_fg of the matched detection per pixel (count updates)

@@ -58,6 +58,15 @@ struct TrackOptions {
   /// 0.988 / 0.854 / 0.843 cm; redkitchen 640x480 2.250 / 2.229 / 2.214 / 2.217 cm, 320x240
   /// 2.156 / 2.166 / 2.171 cm. Objects have their own (objects.huber_truncation_factor).
   double huber_truncation_factor = 0.05;
+  /// Motion prior (not a config key; objects set it from objects.motion_prior_rotation): the
+  /// cost gets E_p = (lt |d_t|^2 + lr |d_w|^2) / 2, d = (d_t, d_w) the pose's left difference
+  /// from the initial pose (the prediction) in the increments LM solves for (d_w in radians,
+  /// d_t in metres at the rotation centre), lt = prior_translation_weight, lr =
+  /// prior_rotation_weight. Their unit is the data term's: a pixel with map weight max W, q = 1
+  /// and a unit SDF gradient adds r^2 / 2. Coarse levels, with 1/4 of the pixels per level, use
+  /// 1/4 of the weights per level. 0 = off (the paper).
+  double prior_translation_weight = 0.0;
+  double prior_rotation_weight = 0.0;
 
   // Speed (bench/track_bench measures these against the paper's settings above). Camera
   // defaults from bench/slam_bench on redkitchen, 300 frames (quiet machine): ATE 2.155 cm at

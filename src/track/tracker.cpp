@@ -387,7 +387,8 @@ NormalEquations Tracker::evaluateCandidate(const map::VolumeDeviceView& volume, 
 Tracker::LevelResult Tracker::runLevel(const map::VolumeDeviceView& volume, cl_mem vertex_map,
                                        cl_mem q, int stride, int max_iterations, double tau,
                                        double inv_max_weight, Eigen::Isometry3d* T,
-                                       NormalEquations* at_T, const PixelRect* roi) {
+                                       NormalEquations* at_T, const PixelRect* roi,
+                                       const Eigen::Isometry3d& T_prior, double prior_scale) {
   // Levenberg-Marquardt (Madsen, Nielsen & Tingleff, "Methods for non-linear least squares
   // problems", 2004, alg. 3.16) on left increments; all terms scaled by 1 / max W. The actual
   // cost reduction of a step is measured over the pixels valid at both poses.
@@ -403,8 +404,25 @@ Tracker::LevelResult Tracker::runLevel(const map::VolumeDeviceView& volume, cl_m
                      : options_.rotation_centre == "stiffness"
                          ? centringMap(stiffnessCentre(at_T->H))
                          : centringMap(T->translation());
+  // Motion prior (prior_*_weight): E_p = d' Lambda d' / 2, d' the pose's left difference from
+  // T_prior in the centred increments (d' = M^-T d), Lambda diagonal.
+  Vector6d lambda;
+  lambda << Eigen::Vector3d::Constant(options_.prior_translation_weight * prior_scale),
+      Eigen::Vector3d::Constant(options_.prior_rotation_weight * prior_scale);
+  const bool with_prior = lambda.maxCoeff() > 0.0;
+  const Matrix6d M_inv_T = M.inverse().transpose();
+  const auto priorDeviation = [&](const Eigen::Isometry3d& T_now) {
+    const Eigen::Matrix3d R_d = T_now.linear() * T_prior.linear().transpose();
+    Vector6d d;
+    d << T_now.translation() - R_d * T_prior.translation(), logSo3(R_d);
+    return Vector6d(M_inv_T * d);
+  };
+  Vector6d dev = with_prior ? priorDeviation(*T) : Vector6d::Zero();
+  const auto priorCost = [&](const Vector6d& d) { return 0.5 * d.dot(lambda.cwiseProduct(d)); };
   Matrix6d H = M * at_T->H * M.transpose() * inv_max_weight;
   Vector6d g = M * at_T->g * inv_max_weight;
+  H.diagonal() += lambda;
+  g += lambda.cwiseProduct(dev);
   double mu = tau * H.diagonal().maxCoeff();
   double nu = options_.lm_nu;
   res.final_damping = tau;
@@ -446,7 +464,8 @@ Tracker::LevelResult Tracker::runLevel(const map::VolumeDeviceView& volume, cl_m
     const Eigen::Isometry3d T_new = applyLeftIncrement(M.transpose() * h, *T);
     const NormalEquations ne = evaluateCandidate(volume, vertex_map, q, T_new, stride, true, roi);
     ++res.iterations;
-    const double actual = -ne.cost_change * inv_max_weight;
+    const Vector6d dev_new = with_prior ? priorDeviation(T_new) : Vector6d::Zero();
+    const double actual = -ne.cost_change * inv_max_weight + priorCost(dev) - priorCost(dev_new);
     const double predicted = 0.5 * h_lm.dot(mu * h_lm - g);  // model decrease of the LM step
     const double gain = actual / predicted / scale;
     const bool accepted = ne.valid > 0 && predicted > 0.0 && gain > 0.0;
@@ -456,6 +475,9 @@ Tracker::LevelResult Tracker::runLevel(const map::VolumeDeviceView& volume, cl_m
       current_ = 1 - current_;
       H = M * ne.H * M.transpose() * inv_max_weight;
       g = M * ne.g * inv_max_weight;
+      dev = dev_new;
+      H.diagonal() += lambda;
+      g += lambda.cwiseProduct(dev);
       new_model = true;
       const double c = 2.0 * gain - 1.0;
       mu *= std::max(1.0 / 3.0, 1.0 - c * c * c);
@@ -492,7 +514,8 @@ TrackResult Tracker::track(const map::VolumeDeviceView& volume, cl_mem vertex_ma
     if (level != levels) ne = evaluate(volume, vertex_map, q, T, stride, false, roi);
     const int cap = level == 0 ? options_.max_iterations : options_.coarse_max_iterations;
     const LevelResult lr =
-        runLevel(volume, vertex_map, q, stride, cap, tau, inv_max_weight, &T, &ne, roi);
+        runLevel(volume, vertex_map, q, stride, cap, tau, inv_max_weight, &T, &ne, roi,
+                 T_volume_camera_init, 1.0 / static_cast<double>(1 << (2 * level)));
     result.iterations += lr.iterations;
     finest_converged = lr.converged;
     // Later levels continue with the damping reached so far (relative to the curvature)

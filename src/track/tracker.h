@@ -192,7 +192,8 @@ class Tracker {
   // LM on one level; at_T holds the evaluation at *T (its per-pixel costs in costs_[current_]).
   LevelResult runLevel(const map::VolumeDeviceView& volume, cl_mem vertex_map, cl_mem q, int stride,
                        int max_iterations, double tau, double inv_max_weight, Eigen::Isometry3d* T,
-                       NormalEquations* at_T, const PixelRect* roi);
+                       NormalEquations* at_T, const PixelRect* roi,
+                       const Eigen::Isometry3d& T_prior, double prior_scale);
   // Evaluates at T writing per-pixel costs to costs_[1 - current_], comparing with
   // costs_[current_] if `compare`. The caller swaps current_ to accept.
   NormalEquations evaluateCandidate(const map::VolumeDeviceView& volume, cl_mem vertex_map,

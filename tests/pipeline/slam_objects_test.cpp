@@ -61,7 +61,7 @@ RelativeError perfectAssociationError(double truncation_voxels) {
   const io::Intrinsics k = src->intrinsics();
   map::VoxelPool pool(ctx, config.map);
   track::Preprocessor pre(ctx, objectPreprocessOptions(config), k);
-  track::Tracker tracker(ctx, objectTrackOptions(config), k.width, k.height);
+  track::Tracker tracker(ctx, objectTrackOptions(config, k.width), k.width, k.height);
   const size_t bytes = sizeof(float) * static_cast<size_t>(k.width * k.height);
   cl::MemHandle q = ctx.buffer(CL_MEM_READ_WRITE, bytes);
   std::unique_ptr<map::Volume> vol;

@@ -60,7 +60,7 @@ TEST(ObjectTrackOptions, ObjectsKeepTheirOwnHuberDeltaAndRules) {
   config.track.huber_truncation_factor = 0.05;
   config.objects.huber_truncation_factor = 0.2;
   config.track.pixel_stride = 2;
-  const track::TrackOptions o = objectTrackOptions(config);
+  const track::TrackOptions o = objectTrackOptions(config, 640);
   EXPECT_DOUBLE_EQ(o.huber_truncation_factor, 0.2);
   EXPECT_DOUBLE_EQ(o.inlier_truncation_factor, config.track.inlier_truncation_factor);
   EXPECT_EQ(o.pixel_stride, 1);
@@ -68,7 +68,20 @@ TEST(ObjectTrackOptions, ObjectsKeepTheirOwnHuberDeltaAndRules) {
   EXPECT_DOUBLE_EQ(o.min_valid_fraction, 0.0);
   // The defaults: the camera's tight delta, the objects' the paper's.
   EXPECT_LT(Config{}.track.huber_truncation_factor,
-            objectTrackOptions(Config{}).huber_truncation_factor);
+            objectTrackOptions(Config{}, 640).huber_truncation_factor);
+}
+
+TEST(ObjectTrackOptions, RotationPriorScalesWithTheImageArea) {
+  Config config;
+  config.objects.motion_prior_rotation = 3.0;
+  EXPECT_DOUBLE_EQ(objectTrackOptions(config, 640).prior_rotation_weight, 3.0);
+  EXPECT_DOUBLE_EQ(objectTrackOptions(config, 320).prior_rotation_weight, 0.75);
+  EXPECT_DOUBLE_EQ(objectTrackOptions(config, 1280).prior_rotation_weight, 12.0);
+  EXPECT_DOUBLE_EQ(objectTrackOptions(config, 640).prior_translation_weight, 0.0);
+  // The camera has no prior.
+  EXPECT_DOUBLE_EQ(config.track.prior_rotation_weight, 0.0);
+  config.objects.motion_prior_rotation = 0.0;
+  EXPECT_DOUBLE_EQ(objectTrackOptions(config, 640).prior_rotation_weight, 0.0);
 }
 
 }  // namespace

@@ -554,6 +554,63 @@ TEST_F(TrackerTest, StartingAtTheSolutionStaysThere) {
   }
 }
 
+TEST_F(TrackerTest, MotionPriorBalancesTheDataTermAtTheResult) {
+  // With a motion prior the result is the minimum of data + prior: there the data term's
+  // gradient (scaled by 1 / max W) balances the prior's pull Lambda d, d the result's left
+  // difference from the start pose (about the volume origin with rotation_centre origin). The
+  // weights are half the data term's mean curvature at the true pose, so the result lies
+  // clearly between the truth and the start; a prior far stiffer than the data keeps the start.
+  constexpr double kBalanceRelTolerance = 0.01;  // of max |Lambda d| (float device sums)
+  constexpr double kStiffPriorMotionM = 1e-4;
+  const io::Intrinsics& k = room_->intrinsics;
+  const PreprocessedFrame frame = preprocessReference(room_->depth, k, PreprocessOptions{});
+  cl::MemHandle vertex =
+      ctx().buffer(CL_MEM_READ_ONLY, frame.vertex.total() * sizeof(cv::Vec4f), frame.vertex.data);
+  TrackOptions o;
+  o.coarse_levels = 0;
+  o.pixel_stride = 1;
+  o.rotation_centre = "origin";
+  o.early_exit_step = 0.0;
+  const double delta = o.huber_truncation_factor * room_->host->truncation_m;
+  const NormalEquations at_gt = accumulateReference(room_->host->view(), frame.vertex, cv::Mat(), 1,
+                                                    room_->T_volume_camera_gt, delta);
+  ASSERT_GT(at_gt.max_weight, 0.0);
+  const double inv_w = 1.0 / at_gt.max_weight;  // uniform weights: the same at every pose
+  o.prior_translation_weight = 0.5 * at_gt.H.topLeftCorner<3, 3>().trace() / 3.0 * inv_w;
+  o.prior_rotation_weight = 0.5 * at_gt.H.bottomRightCorner<3, 3>().trace() / 3.0 * inv_w;
+  std::mt19937 rng(71);
+  const Eigen::Isometry3d init = perturb(room_->T_volume_camera_gt, rng, 0.02, 2 * kDeg);
+  Tracker tracker(ctx(), o, k.width, k.height);
+  const TrackResult r = tracker.track(room_->device.view, vertex.get(), nullptr, init);
+  SCOPED_TRACE(std::to_string(r.iterations) + " iterations");
+  const Eigen::Isometry3d& T = r.T_volume_camera;
+  const NormalEquations at_result =
+      accumulateReference(room_->host->view(), frame.vertex, cv::Mat(), 1, T, delta);
+  const Eigen::Matrix3d R_d = T.linear() * init.linear().transpose();
+  Vector6d d;
+  d << T.translation() - R_d * init.translation(), logSo3(R_d);
+  Vector6d lambda;
+  lambda << Eigen::Vector3d::Constant(o.prior_translation_weight),
+      Eigen::Vector3d::Constant(o.prior_rotation_weight);
+  const Vector6d pull = lambda.cwiseProduct(d);
+  const Vector6d total = at_result.g * inv_w + pull;
+  for (int c = 0; c < 6; ++c) {
+    EXPECT_NEAR(total(c), 0.0, kBalanceRelTolerance * pull.cwiseAbs().maxCoeff())
+        << "component " << c << ": data " << at_result.g(c) * inv_w << ", prior " << pull(c);
+  }
+  // Neither the start nor the truth: both terms pull.
+  const double start_error = translationError(room_->T_volume_camera_gt, init);
+  EXPECT_GT(translationError(room_->T_volume_camera_gt, T), 0.1 * start_error);
+  EXPECT_GT(translationError(init, T), 0.1 * start_error);
+
+  TrackOptions stiff = o;
+  stiff.prior_translation_weight *= 1e6;
+  stiff.prior_rotation_weight *= 1e6;
+  Tracker held(ctx(), stiff, k.width, k.height);
+  const TrackResult h = held.track(room_->device.view, vertex.get(), nullptr, init);
+  EXPECT_LT(translationError(init, h.T_volume_camera), kStiffPriorMotionM);
+}
+
 TEST_F(TrackerTest, FeaturelessPlaneIsDegenerate) {
   test::AnalyticScene wall;
   // A tilted wall (normal not along an axis): n . x = n . (1.28, 1.28, 2.3).
