@@ -109,9 +109,9 @@ typedef struct emf_frame_result {
 /** Object states. */
 typedef enum emf_object_state {
   EMF_OBJECT_TRACKED = 1,   /**< tracked (and integrated) in this frame */
-  EMF_OBJECT_INVISIBLE = 2, /**< alive but not visible in this frame (not reported by the
-                                 current lifecycle: an invisible object is deleted, METHOD.md
-                                 step 6; kept so callers need no change if that rule relaxes) */
+  EMF_OBJECT_INVISIBLE = 2, /**< alive but hidden behind nearer surfaces in this frame
+                                 (objects.hidden_fraction): not tracked, its pose held still in
+                                 the world, not integrated */
   EMF_OBJECT_DELETED = 3,   /**< deleted in this frame (reported once) */
   EMF_OBJECT_LOST = 4       /**< tracking of the object failed in this frame: pose kept */
 } emf_object_state;

@@ -61,6 +61,24 @@ struct ObjectOptions {
   /// a wrong place (cars preset: car 2 lost near frame 90, "found" 2 m off). A detection
   /// re-creates it where it is. 0 = never (the paper has no such rule).
   int max_lost_frames = 15;
+  /// Occlusion (not in the paper, which renders masks with nearer objects in front and so
+  /// deletes an object hidden behind another as invisible): an object whose own ray cast (at
+  /// visibility_width, other objects not drawn) has at least this fraction of its pixels behind
+  /// nearer measured surfaces (by more than its truncation + track.inlier_noise_per_m2 z^2) is
+  /// hidden. A hidden object is not tracked on the next frame (its few visible pixels pull it
+  /// towards whatever is in front, and LM then fails or drifts): its pose is held still in the
+  /// world, it is not integrated, its lost-frame count does not grow, and its visibility counts
+  /// its own ray cast inside the border. 0 = off (the paper).
+  double hidden_fraction = 0.5;
+  /// Objects hidden on more than this many frames in a row are deleted: an object moved while
+  /// hidden would be re-acquired from a stale pose. 0 = never.
+  int max_hidden_frames = 300;
+  /// The E-step's occlusion gate (not in the paper): a pixel whose point lies in front of an
+  /// object's surface, as its own ray cast of the last visibility check shows it, by more than
+  /// the object's truncation + track.inlier_noise_per_m2 z^2 is not associated with the object
+  /// (em::OcclusionGate). Unobserved space inside an object's volume otherwise takes half of a
+  /// surface that slides in front of the object, and its model absorbs that surface.
+  bool occlusion_gate = true;
   int max_objects = 8;
   /// An object is not created when its first integration leaves less than this fraction of the
   /// voxel pool free: the background (and the objects' growth) keep room in a fixed pool.
@@ -143,6 +161,14 @@ struct ObjectOptions {
            "objects whose mean association over their mask is below this are deleted");
     b.integer("max_lost_frames", max_lost_frames, 0, 100000, "frames",
               "objects whose tracking failed on more frames in a row are deleted (0 = never)");
+    b.real("hidden_fraction", hidden_fraction, 0.0, 1.0, "",
+           "an object with this fraction of its ray cast behind nearer surfaces is hidden: held "
+           "still, not tracked, not deleted as lost or invisible (0 = off, the paper)");
+    b.integer("max_hidden_frames", max_hidden_frames, 0, 100000, "frames",
+              "objects hidden on more frames in a row are deleted (0 = never)");
+    b.boolean("occlusion_gate", occlusion_gate,
+              "pixels in front of an object's last ray-cast surface are not associated with it "
+              "(false = the paper)");
     b.boolean("free_space_full_weight", free_space_full_weight,
               "object volumes integrate free space with weight 1 whatever q (the authors' "
               "rule; off: weighted by q, which keeps other surfaces from eroding the object)");

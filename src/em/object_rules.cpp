@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <opencv2/imgproc.hpp>
 
 namespace emf::em {
@@ -264,6 +265,40 @@ double meanAssociation(const cv::Mat& q, const cv::Mat& object_ids, int object_i
   cv::Mat weights;
   m.convertTo(weights, CV_32F, 1.0 / 255.0);
   return cv::sum(q.mul(weights))[0] / n;
+}
+
+Occlusion occlusion(const cv::Mat& rendered_depth, const cv::Mat& measured_depth, double margin_m,
+                    double margin_per_m2, cv::Mat* hidden_mask) {
+  CV_Assert(rendered_depth.type() == CV_32F && measured_depth.type() == CV_32F &&
+            rendered_depth.size() == measured_depth.size());
+  Occlusion occ;
+  if (hidden_mask) hidden_mask->create(rendered_depth.size(), CV_8U);
+  for (int v = 0; v < rendered_depth.rows; ++v) {
+    const float* r = rendered_depth.ptr<float>(v);
+    const float* m = measured_depth.ptr<float>(v);
+    uint8_t* h = hidden_mask ? hidden_mask->ptr<uint8_t>(v) : nullptr;
+    for (int u = 0; u < rendered_depth.cols; ++u) {
+      bool hidden = false;
+      if (std::isfinite(r[u]) && r[u] > 0.0f) {
+        ++occ.rendered;
+        const double z = r[u];
+        hidden =
+            std::isfinite(m[u]) && m[u] > 0.0f && m[u] < z - (margin_m + margin_per_m2 * z * z);
+        if (hidden) ++occ.hidden;
+      }
+      if (h) h[u] = hidden ? 255 : 0;
+    }
+  }
+  return occ;
+}
+
+bool isHidden(const Occlusion& occlusion, const ObjectOptions& options) {
+  return options.hidden_fraction > 0.0 && occlusion.rendered > 0 &&
+         occlusion.hiddenFraction() >= options.hidden_fraction;
+}
+
+bool hiddenTooLong(int consecutive_hidden_frames, const ObjectOptions& options) {
+  return options.max_hidden_frames > 0 && consecutive_hidden_frames > options.max_hidden_frames;
 }
 
 bool lostTooLong(int consecutive_lost_frames, const ObjectOptions& options) {

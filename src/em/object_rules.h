@@ -111,6 +111,27 @@ bool isInvisible(const cv::Mat& object_ids, int object_id, const ObjectOptions& 
 /// objects.min_mean_association. Returns 0 for an empty mask.
 double meanAssociation(const cv::Mat& q, const cv::Mat& object_ids, int object_id);
 
+/// Occlusion of an object (beyond the paper) in its own ray cast (`rendered_depth` CV_32F camera
+/// z, NaN = not rendered; other objects are not drawn in it): of its rendered pixels, `hidden`
+/// counts those whose measured depth (`measured_depth`, same size, NaN invalid) is nearer than
+/// the rendered surface by more than margin_m + margin_per_m2 z^2 (z the rendered depth):
+/// something stands in front. Pixels without a valid measurement are not hidden. If
+/// `hidden_mask` is given it receives the hidden pixels (CV_8U, 255).
+struct Occlusion {
+  int rendered = 0;
+  int hidden = 0;
+  double hiddenFraction() const {
+    return rendered > 0 ? static_cast<double>(hidden) / rendered : 0.0;
+  }
+};
+Occlusion occlusion(const cv::Mat& rendered_depth, const cv::Mat& measured_depth, double margin_m,
+                    double margin_per_m2, cv::Mat* hidden_mask = nullptr);
+/// Hidden: at least objects.hidden_fraction of the rendered pixels are hidden (never with
+/// hidden_fraction 0 or nothing rendered).
+bool isHidden(const Occlusion& occlusion, const ObjectOptions& options);
+/// Objects hidden on more than objects.max_hidden_frames frames in a row are deleted.
+bool hiddenTooLong(int consecutive_hidden_frames, const ObjectOptions& options);
+
 /// Objects whose tracking failed on more than objects.max_lost_frames frames in a row are
 /// deleted (not in the paper: a stale pose re-acquires the object at a wrong place).
 bool lostTooLong(int consecutive_lost_frames, const ObjectOptions& options);

@@ -58,13 +58,23 @@ cv::Mat SlamSystem::downloadVertexMap() const {
 std::vector<em::EStepVolume> SlamSystem::eStepVolumes(const Eigen::Isometry3d& T_world_camera,
                                                       const std::vector<Eigen::Isometry3d>& T_oc) {
   std::vector<em::EStepVolume> volumes;
-  volumes.push_back({deviceView(*background_), nullptr,
-                     background_->T_world_volume().inverse() * T_world_camera});
+  volumes.push_back({deviceView(*background_),
+                     nullptr,
+                     background_->T_world_volume().inverse() * T_world_camera,
+                     {}});
   estep_ids_ = {0};
   for (size_t k = 0; k < objects_.size(); ++k) {
     TrackedObject& o = objects_[k];
     o.e_step_slot = static_cast<int>(volumes.size());
-    volumes.push_back({deviceView(*o.volume), o.volume->countIndex().get(), T_oc[k]});
+    em::OcclusionGate gate;
+    if (config_.objects.occlusion_gate && o.gate_valid) {
+      gate.depth = o.gate.get();
+      gate.width = visibility_k_.width;
+      gate.height = visibility_k_.height;
+      gate.margin_m = static_cast<float>(o.volume->spec().truncation_m);
+      gate.margin_per_m2 = static_cast<float>(config_.track.inlier_noise_per_m2);
+    }
+    volumes.push_back({deviceView(*o.volume), o.volume->countIndex().get(), T_oc[k], gate});
     estep_ids_.push_back(o.id);
   }
   return volumes;
@@ -80,6 +90,17 @@ void SlamSystem::trackObjects(const std::vector<Eigen::Isometry3d>& T_oc_predict
   ScopedStage s(timer_, "track_objects");
   for (size_t k = 0; k < objects_.size(); ++k) {
     TrackedObject& o = objects_[k];
+    if (o.hidden) {
+      // Hidden behind nearer surfaces at the last check: held still in the world (its pose
+      // relative to the camera follows the camera), not integrated, not counted as lost.
+      o.state = ObjectState::kInvisible;
+      ++o.hidden_frames;
+      o.last_motion = last_motion_;
+      logDebug("frame ", frames_, ": object ", o.id, " hidden: held (", o.hidden_frames,
+               " frames)");
+      continue;
+    }
+    o.hidden_frames = 0;
     const Eigen::Isometry3d T_oc_before =
         o.volume->T_world_volume().inverse() * T_world_camera_ * last_motion_.inverse();
     // q of the object is 0 outside its volume at the E-step's pose (T_oc_predicted): only the
@@ -350,20 +371,22 @@ bool SlamSystem::createObject(const io::Detection& d, const cv::Mat& vertex) {
   return true;
 }
 
-void SlamSystem::checkVisibility() {
+void SlamSystem::checkVisibility(const cv::Mat& depth) {
   const em::ObjectOptions& opt = visibility_options_;  // thresholds at the ray cast's size
-  // Objects only: visibility is about the projected mask inside the image. The cast runs at
-  // objects.visibility_width; q is averaged down to it.
-  std::vector<map::RenderItem> items;
-  for (const auto& o : objects_) items.push_back({o.volume.get(), o.id, 0.0f});
-  raycaster_.render(items, visibility_k_, T_world_camera_);
-  raycaster_.download(nullptr, nullptr, &visibility_ids_);
+  // Each object is ray-cast alone at objects.visibility_width (q and the depth are brought to
+  // that size): its own mask says whether it is in view, and the measured depth in front of it
+  // whether it is hidden.
   const bool scaled = visibility_k_.width != intrinsics_.width;
   const std::string at = scaled ? " (ray cast at " + std::to_string(visibility_k_.width) + "x" +
                                       std::to_string(visibility_k_.height) + ")"
                                 : std::string();
+  cv::Mat measured = depth;
+  if (scaled) {
+    cv::resize(depth, measured, cv::Size(visibility_k_.width, visibility_k_.height), 0, 0,
+               cv::INTER_NEAREST);
+  }
   for (size_t k = objects_.size(); k-- > 0;) {
-    const TrackedObject& o = objects_[k];
+    TrackedObject& o = objects_[k];
     if (o.first_frame == frames_) continue;  // created this frame
     if (em::lostTooLong(o.lost_frames, opt)) {
       deleteObject(k, "lost: not tracked on " + std::to_string(o.lost_frames) +
@@ -371,16 +394,41 @@ void SlamSystem::checkVisibility() {
                           std::to_string(opt.max_lost_frames) + "), its pose is stale");
       continue;
     }
-    if (em::isInvisible(visibility_ids_, o.id, opt)) {
-      const int visible = em::visiblePixels(visibility_ids_, o.id, opt);
+    if (em::hiddenTooLong(o.hidden_frames, opt)) {
+      deleteObject(k, "hidden: behind nearer surfaces on " + std::to_string(o.hidden_frames) +
+                          " frames in a row (> objects.max_hidden_frames " +
+                          std::to_string(opt.max_hidden_frames) + "), its pose is stale");
+      continue;
+    }
+    raycaster_.render({{o.volume.get(), o.id, 0.0f}}, visibility_k_, T_world_camera_);
+    cv::Mat rendered_depth, ids, hidden_mask;
+    raycaster_.download(&rendered_depth, nullptr, &ids);
+    const size_t gate_bytes = rendered_depth.total() * sizeof(float);
+    if (!o.gate) o.gate = ctx_.buffer(CL_MEM_READ_ONLY, gate_bytes);
+    ctx_.write(o.gate, rendered_depth.data, gate_bytes);
+    o.gate_valid = true;
+    const em::Occlusion occ = em::occlusion(rendered_depth, measured, o.volume->spec().truncation_m,
+                                            config_.track.inlier_noise_per_m2, &hidden_mask);
+    // Only an object tracked (or held) up to now becomes hidden: one whose tracking failed may
+    // have moved nearer than its stale pose, which looks the same; it stays lost.
+    o.hidden = em::isHidden(occ, opt) &&
+               (o.state == ObjectState::kTracked || o.state == ObjectState::kInvisible);
+    if (o.hidden) {
+      logDebug("frame ", frames_, ": object ", o.id, " hidden: ", occ.hidden, " of ", occ.rendered,
+               " px behind nearer surfaces", at);
+    }
+    if (em::isInvisible(ids, o.id, opt)) {
+      const int visible = em::visiblePixels(ids, o.id, opt);
       deleteObject(k, "invisible: " + std::to_string(visible) + " px < " +
                           std::to_string(opt.invisible_min_px) + " px" + at);
       continue;
     }
-    if (o.state != ObjectState::kTracked || estep_ids_.size() <= 1) continue;
+    if (o.hidden || o.state != ObjectState::kTracked || estep_ids_.size() <= 1) continue;
+    // Mean association over the pixels where the object is in front (hidden ones say nothing).
+    ids.setTo(-1, hidden_mask);
     cv::Mat q = estep_.downloadQ(o.e_step_slot);
-    if (scaled) cv::resize(q, q, visibility_ids_.size(), 0, 0, cv::INTER_AREA);
-    const double mean_q = em::meanAssociation(q, visibility_ids_, o.id);
+    if (scaled) cv::resize(q, q, ids.size(), 0, 0, cv::INTER_AREA);
+    const double mean_q = em::meanAssociation(q, ids, o.id);
     if (mean_q < opt.min_mean_association) {
       char reason[96];
       std::snprintf(reason, sizeof(reason), "mean association %.3f < %.3f", mean_q,

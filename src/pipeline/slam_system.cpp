@@ -253,7 +253,7 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
     {
       ScopedStage s(timer_, "objects");
       if (out.detector_ran) deleteByExistence();
-      if (!objects_.empty()) checkVisibility();
+      if (!objects_.empty()) checkVisibility(frame.depth);
     }
   }
   fillObjectOutcomes(&out);

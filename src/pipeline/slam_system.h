@@ -35,7 +35,8 @@ namespace emf::pipeline {
 enum class ObjectState {
   kTracked,    // tracked and integrated this frame
   kLost,       // tracking failed this frame: pose kept, not integrated
-  kInvisible,  // alive but not seen this frame (not produced yet: invisible objects are deleted)
+  kInvisible,  // alive but hidden behind nearer surfaces (objects.hidden_fraction): not tracked,
+               // pose held still in the world, not integrated
   kDeleted,    // deleted in this frame (reported once, then gone)
 };
 const char* objectStateName(ObjectState state);
@@ -94,7 +95,15 @@ struct TrackedObject {
   em::Existence existence;
   int64_t first_frame = 0, last_frame = 0;
   ObjectState state = ObjectState::kTracked;
-  int lost_frames = 0;       // consecutive frames its tracking failed (with the camera tracked)
+  int lost_frames = 0;  // consecutive frames its tracking failed (with the camera tracked)
+  /// Hidden behind nearer surfaces in the last visibility check (objects.hidden_fraction): the
+  /// next frame holds it instead of tracking it. hidden_frames: consecutive frames held.
+  bool hidden = false;
+  int hidden_frames = 0;
+  /// Its own ray-cast depth of the last visibility check (visibility size), the E-step's
+  /// occlusion gate (objects.occlusion_gate); gate_valid once written.
+  cl::MemHandle gate;
+  bool gate_valid = false;
   int pool_full_frames = 0;  // frames on which some of its blocks found no slot in the pool
   int e_step_slot = 0;       // index of this object in the current E-step (1..)
 };
@@ -188,7 +197,9 @@ class SlamSystem {
   bool createObject(const io::Detection& d, const cv::Mat& vertex);
   // After integration: delete objects whose existence probability fell too low.
   void deleteByExistence();
-  void checkVisibility();
+  // After integration: the visibility, association, lost and hidden rules on each object's own
+  // ray cast at objects.visibility_width against `depth` (the frame's raw depth).
+  void checkVisibility(const cv::Mat& depth);
   void deleteObject(size_t i, const std::string& reason);
   void fillObjectOutcomes(FrameOutcome* out) const;
   cv::Mat downloadVertexMap() const;  // of objectVertexMap()
@@ -214,11 +225,10 @@ class SlamSystem {
   std::vector<io::Detection> unmatched_;    // this frame's detections that matched nothing
   std::vector<ObjectOutcome> deleted_now_;  // objects deleted in this frame
   cv::Mat last_ids_;  // object ids ray-cast for the last detection matching (frame size)
-  // The visibility rule's ray cast: its image size (objects.visibility_width), its thresholds
-  // scaled to that size, and its last object ids.
+  // The visibility rule's ray cast: its image size (objects.visibility_width) and its thresholds
+  // scaled to that size.
   io::Intrinsics visibility_k_;
   em::ObjectOptions visibility_options_;
-  cv::Mat visibility_ids_;
   int next_object_id_ = 1;
   std::function<void(const TrackedObject&)> deletion_hook_;
   std::unique_ptr<DetectorScheduler> scheduler_;  // null without a detector plugin

@@ -327,6 +327,49 @@ TEST(ObjectRules, LostTooLongAfterMaxLostFrames) {
   EXPECT_FALSE(lostTooLong(100000, o));
 }
 
+TEST(ObjectRules, OcclusionCountsRenderedPixelsBehindNearerMeasurements) {
+  // An object rendered at 2 m on a 4x3 patch; margin 0.05 m + 0.01 z^2 = 0.09 m at 2 m.
+  cv::Mat rendered(6, 8, CV_32F, cv::Scalar(NAN));
+  rendered(cv::Rect(2, 1, 4, 3)).setTo(2.0f);
+  cv::Mat measured(6, 8, CV_32F, cv::Scalar(2.0f));
+  measured.at<float>(1, 2) = 1.0f;   // far in front: hidden
+  measured.at<float>(1, 3) = 1.90f;  // 0.10 m in front: hidden
+  measured.at<float>(1, 4) = 1.92f;  // 0.08 m in front, within the margin: not hidden
+  measured.at<float>(1, 5) = 2.5f;   // behind the object: not hidden (it moved away)
+  measured.at<float>(2, 2) = NAN;    // no measurement: not hidden
+  measured.at<float>(0, 0) = 0.5f;   // in front, but the object is not rendered there
+  cv::Mat mask;
+  const Occlusion occ = occlusion(rendered, measured, 0.05, 0.01, &mask);
+  EXPECT_EQ(occ.rendered, 12);
+  EXPECT_EQ(occ.hidden, 2);
+  EXPECT_NEAR(occ.hiddenFraction(), 2.0 / 12.0, 1e-12);
+  EXPECT_EQ(cv::countNonZero(mask), 2);
+  EXPECT_EQ(mask.at<uint8_t>(1, 2), 255);
+  EXPECT_EQ(mask.at<uint8_t>(1, 3), 255);
+  EXPECT_EQ(mask.at<uint8_t>(1, 4), 0);
+
+  ObjectOptions o;
+  o.hidden_fraction = 0.5;
+  EXPECT_FALSE(isHidden(occ, o));
+  measured(cv::Rect(2, 2, 4, 2)).setTo(1.0f);  // 8 more in front (one was NaN): 10 of 12
+  const Occlusion covered = occlusion(rendered, measured, 0.05, 0.01);
+  EXPECT_EQ(covered.hidden, 10);
+  EXPECT_TRUE(isHidden(covered, o));
+  o.hidden_fraction = 0.0;  // off (the paper)
+  EXPECT_FALSE(isHidden(covered, o));
+  o.hidden_fraction = 0.5;
+  EXPECT_FALSE(isHidden(Occlusion{}, o));  // nothing rendered
+}
+
+TEST(ObjectRules, HiddenTooLongAfterMaxHiddenFrames) {
+  ObjectOptions o;
+  o.max_hidden_frames = 300;
+  EXPECT_FALSE(hiddenTooLong(300, o));
+  EXPECT_TRUE(hiddenTooLong(301, o));
+  o.max_hidden_frames = 0;  // never
+  EXPECT_FALSE(hiddenTooLong(100000, o));
+}
+
 TEST(ObjectRules, GrowthInWholeBlocks) {
   // 8 x 8 x 8 blocks of 8 voxels of 1 cm: the volume spans [0, 0.64) m per axis.
   const Eigen::Vector3i dims(8, 8, 8);
