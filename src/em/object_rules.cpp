@@ -292,9 +292,12 @@ Occlusion occlusion(const cv::Mat& rendered_depth, const cv::Mat& measured_depth
   return occ;
 }
 
-bool isHidden(const Occlusion& occlusion, const ObjectOptions& options) {
-  return options.hidden_fraction > 0.0 && occlusion.rendered > 0 &&
-         occlusion.hiddenFraction() >= options.hidden_fraction;
+bool isHidden(const Occlusion& occlusion, const ObjectOptions& options, bool was_hidden) {
+  if (options.hidden_fraction <= 0.0 || occlusion.rendered == 0) return false;
+  const double threshold = was_hidden
+                               ? std::min(options.visible_again_fraction, options.hidden_fraction)
+                               : options.hidden_fraction;
+  return occlusion.hiddenFraction() >= threshold;
 }
 
 bool hiddenTooLong(int consecutive_hidden_frames, const ObjectOptions& options) {

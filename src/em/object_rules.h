@@ -126,9 +126,10 @@ struct Occlusion {
 };
 Occlusion occlusion(const cv::Mat& rendered_depth, const cv::Mat& measured_depth, double margin_m,
                     double margin_per_m2, cv::Mat* hidden_mask = nullptr);
-/// Hidden: at least objects.hidden_fraction of the rendered pixels are hidden (never with
-/// hidden_fraction 0 or nothing rendered).
-bool isHidden(const Occlusion& occlusion, const ObjectOptions& options);
+/// Hidden: at least objects.hidden_fraction of the rendered pixels are hidden; an object that
+/// was hidden (`was_hidden`) stays so until fewer than objects.visible_again_fraction are (never
+/// with hidden_fraction 0 or nothing rendered).
+bool isHidden(const Occlusion& occlusion, const ObjectOptions& options, bool was_hidden = false);
 /// Objects hidden on more than objects.max_hidden_frames frames in a row are deleted.
 bool hiddenTooLong(int consecutive_hidden_frames, const ObjectOptions& options);
 

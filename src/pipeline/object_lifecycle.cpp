@@ -411,7 +411,7 @@ void SlamSystem::checkVisibility(const cv::Mat& depth) {
                                             config_.track.inlier_noise_per_m2, &hidden_mask);
     // Only an object tracked (or held) up to now becomes hidden: one whose tracking failed may
     // have moved nearer than its stale pose, which looks the same; it stays lost.
-    o.hidden = em::isHidden(occ, opt) &&
+    o.hidden = em::isHidden(occ, opt, o.hidden) &&
                (o.state == ObjectState::kTracked || o.state == ObjectState::kInvisible);
     if (o.hidden) {
       logDebug("frame ", frames_, ": object ", o.id, " hidden: ", occ.hidden, " of ", occ.rendered,

@@ -355,8 +355,18 @@ TEST(ObjectRules, OcclusionCountsRenderedPixelsBehindNearerMeasurements) {
   const Occlusion covered = occlusion(rendered, measured, 0.05, 0.01);
   EXPECT_EQ(covered.hidden, 10);
   EXPECT_TRUE(isHidden(covered, o));
+  // Hysteresis: once hidden, the object stays hidden until fewer than visible_again_fraction
+  // of its pixels are (2 of 12 = 0.17 here).
+  o.visible_again_fraction = 0.1;
+  EXPECT_FALSE(isHidden(occ, o, false));
+  EXPECT_TRUE(isHidden(occ, o, true));
+  o.visible_again_fraction = 0.2;
+  EXPECT_FALSE(isHidden(occ, o, true));
+  o.visible_again_fraction = 0.9;  // capped at hidden_fraction
+  EXPECT_TRUE(isHidden(covered, o, true));
   o.hidden_fraction = 0.0;  // off (the paper)
   EXPECT_FALSE(isHidden(covered, o));
+  EXPECT_FALSE(isHidden(covered, o, true));
   o.hidden_fraction = 0.5;
   EXPECT_FALSE(isHidden(Occlusion{}, o));  // nothing rendered
 }
