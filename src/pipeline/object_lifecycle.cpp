@@ -364,6 +364,9 @@ bool SlamSystem::createObject(const io::Detection& d, const cv::Mat& vertex) {
     return false;
   }
   o.id = next_object_id_++;
+  // Its own ray-cast depth at the visibility check's size: the E-step's occlusion gate.
+  o.gate = ctx_.buffer(CL_MEM_READ_ONLY, sizeof(float) * static_cast<size_t>(visibility_k_.width) *
+                                             static_cast<size_t>(visibility_k_.height));
   logInfo("frame ", frames_, ": object ", o.id, " ('", o.class_name,
           "') created: ", placement.resolution, "^3 voxels of ", placement.voxel_size_m * 100,
           " cm at (", placement.centre_world.transpose(), "), ", r.allocated_blocks, " blocks");
@@ -403,9 +406,7 @@ void SlamSystem::checkVisibility(const cv::Mat& depth) {
     raycaster_.render({{o.volume.get(), o.id, 0.0f}}, visibility_k_, T_world_camera_);
     cv::Mat rendered_depth, ids, hidden_mask;
     raycaster_.download(&rendered_depth, nullptr, &ids);
-    const size_t gate_bytes = rendered_depth.total() * sizeof(float);
-    if (!o.gate) o.gate = ctx_.buffer(CL_MEM_READ_ONLY, gate_bytes);
-    ctx_.write(o.gate, rendered_depth.data, gate_bytes);
+    ctx_.write(o.gate, rendered_depth.data, rendered_depth.total() * sizeof(float));
     o.gate_valid = true;
     const em::Occlusion occ = em::occlusion(rendered_depth, measured, o.volume->spec().truncation_m,
                                             config_.track.inlier_noise_per_m2, &hidden_mask);
