@@ -7,10 +7,6 @@
 // only with a tiny association (e.g. a moving object's pixels in the background, q_0 ~ 0.05)
 // from claiming the pixel fully in the next E-step.
 // p_fg = 1 for volumes without counts (the background).
-// Occlusion gate (objects, beyond the paper): with gate_w > 0, `gate` holds the volume's own
-// ray-cast depth (gate_w x gate_h, NaN = not rendered) from the last visibility check; a pixel
-// whose point lies nearer than that surface by more than gate_margin + gate_per_m2 d^2 is in
-// front of the object, not on it, and gets likelihood 0 for it (em::gatedByOcclusion).
 //
 // Ablation (mode 1, em.association = pfg; the paper's "w/o assoc."): objects get q_i = p_fg,i
 // at the point (0 outside the volume), the background q_0 = 1 - max_i q_i; no SDF residual
@@ -33,10 +29,7 @@ __kernel void estep_likelihood16(__global const float4* vertex, const int count,
                                  const int4 dims, __global const short2* voxels,
                                  const float voxel_size, const float truncation, const float sigma,
                                  const float alpha, const float p_uniform, const float min_weight,
-                                 const int pfg_mode, __global const float* gate, const int gate_w,
-                                 const int gate_h, const int width, const int height,
-                                 const float gate_margin, const float gate_per_m2,
-                                 const int first, __global float* likelihood,
+                                 const int pfg_mode, const int first, __global float* likelihood,
                                  __global float* sum, __global float* best,
                                  __global float* residual) {
   const int base = get_global_id(0) * 16;
@@ -72,21 +65,7 @@ __kernel void estep_likelihood16(__global const float4* vertex, const int count,
     const float16 lik_in = pfg_mode ? (has_counts ? pfg : (float16)1.0f)
                                     : alpha / (2.0f * sigma) * exp(-abs_psi_in / sigma) * pfg +
                                           (1.0f - alpha) * p_uniform;
-    int16 gated = 0;
-    if (gate_w > 0) {
-      float16 d;
-#define ESTEP_GATE(l)                                    \
-  {                                                      \
-    const int u = min(base + 0x##l, count - 1);          \
-    const int gx = (u % width) * gate_w / width;         \
-    const int gy = (u / width) * gate_h / height;        \
-    d.s##l = gate[gy * gate_w + gx];                     \
-  }
-      EMF_LANES16(ESTEP_GATE)
-#undef ESTEP_GATE
-      gated = isfinite(d) & (d > 0.0f) & (pz < d - (gate_margin + gate_per_m2 * d * d));
-    }
-    lik = (inside & !gated) ? lik_in : 0.0f;
+    lik = inside ? lik_in : 0.0f;
     abs_psi = inside ? abs_psi_in : NAN;
   }
 #define ESTEP_STORE(l)                            \

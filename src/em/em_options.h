@@ -78,12 +78,6 @@ struct ObjectOptions {
   /// Objects hidden on more than this many frames in a row are deleted: an object moved while
   /// hidden would be re-acquired from a stale pose. 0 = never.
   int max_hidden_frames = 300;
-  /// The E-step's occlusion gate (not in the paper): a pixel whose point lies in front of an
-  /// object's surface, as its own ray cast of the last visibility check shows it, by more than
-  /// the object's truncation + track.inlier_noise_per_m2 z^2 is not associated with the object
-  /// (em::OcclusionGate). Unobserved space inside an object's volume otherwise takes half of a
-  /// surface that slides in front of the object, and its model absorbs that surface.
-  bool occlusion_gate = true;
   int max_objects = 8;
   /// An object is not created when its first integration leaves less than this fraction of the
   /// voxel pool free: the background (and the objects' growth) keep room in a fixed pool.
@@ -177,9 +171,6 @@ struct ObjectOptions {
            "hidden (at most hidden_fraction)");
     b.integer("max_hidden_frames", max_hidden_frames, 0, 100000, "frames",
               "objects hidden on more frames in a row are deleted (0 = never)");
-    b.boolean("occlusion_gate", occlusion_gate,
-              "pixels in front of an object's last ray-cast surface are not associated with it "
-              "(false = the paper)");
     b.boolean("free_space_full_weight", free_space_full_weight,
               "object volumes integrate free space with weight 1 whatever q (the authors' "
               "rule; off: weighted by q, which keeps other surfaces from eroding the object)");

@@ -21,15 +21,6 @@ Eigen::Matrix<float, 3, 4> poseRows(const Eigen::Isometry3d& T) {
 
 }  // namespace
 
-bool gatedByOcclusion(const HostOcclusionGate& gate, int u, int v, int width, int height, float z) {
-  if (gate.depth.empty()) return false;
-  // Integer pixel mapping as the kernel.
-  const int gx = u * gate.depth.cols / width;
-  const int gy = v * gate.depth.rows / height;
-  const float d = gate.depth.at<float>(gy, gx);
-  return std::isfinite(d) && d > 0.0f && z < d - (gate.margin_m + gate.margin_per_m2 * d * d);
-}
-
 float associationLikelihood(const EStepHostVolume& volume, const Eigen::Vector3f& p_camera,
                             const EmOptions& options, float* abs_psi) {
   const Eigen::Matrix<float, 3, 4> M = poseRows(volume.T_volume_camera);
@@ -69,7 +60,6 @@ std::vector<cv::Mat> eStepReference(const std::vector<EStepHostVolume>& volumes,
       for (size_t i = 0; i < volumes.size(); ++i) {
         float abs_psi = NAN;
         lik[i] = associationLikelihood(volumes[i], {p[0], p[1], p[2]}, options, &abs_psi);
-        if (gatedByOcclusion(volumes[i].gate, u, v, vertex.cols, vertex.rows, p[2])) lik[i] = 0.0f;
         sum += lik[i];
         if (lik[i] > best) {
           best = lik[i];
@@ -135,10 +125,6 @@ void EStep::compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes) 
                 v.view.voxel_size_m, v.view.truncation_m, static_cast<float>(options_.sigma_m),
                 static_cast<float>(options_.alpha), static_cast<float>(options_.p_uniform),
                 static_cast<float>(options_.min_weight), pfg_mode,
-                v.gate.depth != nullptr ? v.gate.depth : v.view.index,
-                static_cast<cl_int>(v.gate.depth != nullptr ? v.gate.width : 0),
-                static_cast<cl_int>(v.gate.height), static_cast<cl_int>(width_),
-                static_cast<cl_int>(height_), v.gate.margin_m, v.gate.margin_per_m2,
                 static_cast<cl_int>(i == 0 ? 1 : 0), q_[i].get(), sum_.get(), best_.get(),
                 residual_.get());
     cl::enqueue(ctx_.queue(), likelihood16_, static_cast<size_t>((count + 15) / 16), 0, 0, 64);

@@ -18,37 +18,17 @@
 
 namespace emf::em {
 
-/// Occlusion gate of an object volume (beyond the paper): its own ray-cast depth (camera z,
-/// NaN = not rendered), possibly smaller than the frame. A pixel at (u, v) whose point's camera
-/// z is nearer than the gate's depth d at (u * gate width / width, v * gate height / height) by
-/// more than margin_m + margin_per_m2 d^2 lies in front of the object: likelihood 0 for it.
-/// Without it, a surface sliding in front of an object inside its volume (unobserved space
-/// there) is shared between the object and the background, and the object's model absorbs it.
-struct OcclusionGate {
-  cl_mem depth = nullptr;  // float, width x height; nullptr = no gate
-  int width = 0, height = 0;
-  float margin_m = 0.0f, margin_per_m2 = 0.0f;
-};
-struct HostOcclusionGate {
-  cv::Mat depth;  // CV_32F; empty = no gate
-  float margin_m = 0.0f, margin_per_m2 = 0.0f;
-};
-/// The gate's test for pixel (u, v) of a width x height frame with point depth z.
-bool gatedByOcclusion(const HostOcclusionGate& gate, int u, int v, int width, int height, float z);
-
 /// One volume as the E-step reads it.
 struct EStepVolume {
   map::VolumeDeviceView view;
   cl_mem count_index = nullptr;  // objects: the count-block index grid; nullptr = p_fg 1
   Eigen::Isometry3d T_volume_camera = Eigen::Isometry3d::Identity();
-  OcclusionGate gate;
 };
 
 /// The same on the host, for the CPU reference.
 struct EStepHostVolume {
   map::VolumeHostView view;  // view.count_index set for objects
   Eigen::Isometry3d T_volume_camera = Eigen::Isometry3d::Identity();
-  HostOcclusionGate gate;
 };
 
 /// Likelihood p(u | i) of one camera-frame point for one volume (0 outside its grid), the CPU
@@ -56,8 +36,7 @@ struct EStepHostVolume {
 float associationLikelihood(const EStepHostVolume& volume, const Eigen::Vector3f& p_camera,
                             const EmOptions& options, float* abs_psi);
 
-/// CPU reference of a whole E-step (with each volume's gate). `vertex` CV_32FC4 (camera frame,
-/// w = 0 invalid). Returns
+/// CPU reference of a whole E-step. `vertex` CV_32FC4 (camera frame, w = 0 invalid). Returns
 /// q per volume (CV_32F, same size); `residual` (optional) gets |psi| of the volume with the
 /// largest likelihood (NaN where none).
 std::vector<cv::Mat> eStepReference(const std::vector<EStepHostVolume>& volumes,

@@ -58,23 +58,13 @@ cv::Mat SlamSystem::downloadVertexMap() const {
 std::vector<em::EStepVolume> SlamSystem::eStepVolumes(const Eigen::Isometry3d& T_world_camera,
                                                       const std::vector<Eigen::Isometry3d>& T_oc) {
   std::vector<em::EStepVolume> volumes;
-  volumes.push_back({deviceView(*background_),
-                     nullptr,
-                     background_->T_world_volume().inverse() * T_world_camera,
-                     {}});
+  volumes.push_back({deviceView(*background_), nullptr,
+                     background_->T_world_volume().inverse() * T_world_camera});
   estep_ids_ = {0};
   for (size_t k = 0; k < objects_.size(); ++k) {
     TrackedObject& o = objects_[k];
     o.e_step_slot = static_cast<int>(volumes.size());
-    em::OcclusionGate gate;
-    if (config_.objects.occlusion_gate && o.gate_valid) {
-      gate.depth = o.gate.get();
-      gate.width = visibility_k_.width;
-      gate.height = visibility_k_.height;
-      gate.margin_m = static_cast<float>(o.volume->spec().truncation_m);
-      gate.margin_per_m2 = static_cast<float>(config_.track.inlier_noise_per_m2);
-    }
-    volumes.push_back({deviceView(*o.volume), o.volume->countIndex().get(), T_oc[k], gate});
+    volumes.push_back({deviceView(*o.volume), o.volume->countIndex().get(), T_oc[k]});
     estep_ids_.push_back(o.id);
   }
   return volumes;
@@ -364,9 +354,6 @@ bool SlamSystem::createObject(const io::Detection& d, const cv::Mat& vertex) {
     return false;
   }
   o.id = next_object_id_++;
-  // Its own ray-cast depth at the visibility check's size: the E-step's occlusion gate.
-  o.gate = ctx_.buffer(CL_MEM_READ_ONLY, sizeof(float) * static_cast<size_t>(visibility_k_.width) *
-                                             static_cast<size_t>(visibility_k_.height));
   logInfo("frame ", frames_, ": object ", o.id, " ('", o.class_name,
           "') created: ", placement.resolution, "^3 voxels of ", placement.voxel_size_m * 100,
           " cm at (", placement.centre_world.transpose(), "), ", r.allocated_blocks, " blocks");
@@ -406,8 +393,6 @@ void SlamSystem::checkVisibility(const cv::Mat& depth) {
     raycaster_.render({{o.volume.get(), o.id, 0.0f}}, visibility_k_, T_world_camera_);
     cv::Mat rendered_depth, ids, hidden_mask;
     raycaster_.download(&rendered_depth, nullptr, &ids);
-    ctx_.write(o.gate, rendered_depth.data, rendered_depth.total() * sizeof(float));
-    o.gate_valid = true;
     const em::Occlusion occ = em::occlusion(rendered_depth, measured, o.volume->spec().truncation_m,
                                             config_.track.inlier_noise_per_m2, &hidden_mask);
     // Only an object tracked (or held) up to now becomes hidden: one whose tracking failed may

@@ -100,10 +100,6 @@ struct TrackedObject {
   /// next frame holds it instead of tracking it. hidden_frames: consecutive frames held.
   bool hidden = false;
   int hidden_frames = 0;
-  /// Its own ray-cast depth of the last visibility check (visibility size), the E-step's
-  /// occlusion gate (objects.occlusion_gate); gate_valid once written.
-  cl::MemHandle gate;
-  bool gate_valid = false;
   int pool_full_frames = 0;  // frames on which some of its blocks found no slot in the pool
   int e_step_slot = 0;       // index of this object in the current E-step (1..)
 };
