@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "box_room_scene.h"
 #include "io/synth/synth_source.h"
 #include "pipeline/slam_system.h"
 #include "test_support.h"
@@ -26,42 +27,22 @@ constexpr int kUncoveredFrom = 75;
 // follows the check of the previous frame, and the edges of the covered span are partial).
 constexpr double kMinHeldFraction = 0.9;
 // The static box's estimated world position after it is uncovered, against before it was
-// covered (10 frames before): measured 0.9-1.7 cm at most over seeds 1-6, against 0.2-0.5 cm of
-// jitter before the panel comes. On the 2-3 frames on which the panel covers part of the box,
-// before it is held, its pose slides 1.5-2.5 cm towards the covered side (the uncovered edge
-// only pins it one way, as at the image border); it recovers once uncovered.
+// covered (10 frames before): measured 0.6-1.6 cm at most over seeds 1-6. On the 2-3 frames on
+// which the panel covers part of the box, before it is held, its pose slides towards the
+// covered side (the uncovered edge only pins it one way, as at the image border); it recovers
+// once uncovered.
 constexpr double kPoseDriftToleranceM = 0.025;
 
 io::synth::Scene coveredBoxScene() {
   using io::synth::at;
-  io::synth::Scene s;
-  s.name = "covered-box";
-  const io::synth::Material floor{
-      {0.3f, 0.45f, 0.6f}, {0.5f, 0.6f, 0.75f}, io::synth::Texture::kTiles, 0.4};
-  const io::synth::Material walls{
-      {0.8f, 0.85f, 0.88f}, {0.55f, 0.66f, 0.74f}, io::synth::Texture::kNoise, 0.3};
-  const io::synth::Material solid{
-      {0.3f, 0.3f, 0.7f}, {0.3f, 0.3f, 0.7f}, io::synth::Texture::kSolid, 1.0};
-  const io::synth::Material red{
-      {0.7f, 0.2f, 0.2f}, {0.7f, 0.2f, 0.2f}, io::synth::Texture::kSolid, 1.0};
-  s.statics.push_back(io::synth::makePlane(at(0, 0, 0), floor));
-  s.statics.push_back(io::synth::makeRoom({3.0, 2.5, 1.5}, at(0, 0.5, 1.3), walls));
-  for (int i = 0; i < 5; ++i) {
-    s.statics.push_back(io::synth::makeBox({0.15, 0.15, 0.3 + 0.1 * i},
-                                           at(-1.2 + 0.6 * i, 2.2, 0.3 + 0.1 * i, 0.3 * i), solid));
-  }
-  io::synth::SceneObject box;
-  box.id = kBoxId;
-  box.class_name = "box";
-  box.parts.push_back(io::synth::makeBox({0.2, 0.2, 0.2}, at(0, 0, 0.2), solid));
-  box.trajectory.origin_m = Eigen::Vector3d(0, 0.6, 0);
-  s.objects.push_back(box);
+  io::synth::Scene s = test_scene::boxRoomScene("covered-box", kBoxId, 0, 0.6);
   // A panel 0.6 m wide and 1 m tall, 1.1 m from the camera and 1 m in front of the box: it
   // slides in from the left, stays in front of the box and slides out to the right.
   io::synth::SceneObject panel;
   panel.id = kPanelId;
   panel.class_name = "panel";
-  panel.parts.push_back(io::synth::makeBox({0.3, 0.025, 0.5}, at(0, 0, 0.5), red));
+  panel.parts.push_back(io::synth::makeBox({0.3, 0.025, 0.5}, at(0, 0, 0.5),
+                                           test_scene::solidMaterial(0.7f, 0.2f, 0.2f)));
   panel.trajectory.origin_m = Eigen::Vector3d(-1.3, -0.4, 0);
   panel.trajectory.moves.push_back({0.3, 0.8, Eigen::Vector3d(1.3, 0, 0), Eigen::Vector3d::Zero()});
   panel.trajectory.moves.push_back({1.8, 2.3, Eigen::Vector3d(1.3, 0, 0), Eigen::Vector3d::Zero()});
@@ -84,10 +65,7 @@ struct BoxRun {
 };
 
 BoxRun runScene(double hidden_fraction) {
-  Config config;
-  config.map.memory_mb = 64;
-  config.map.background_voxel_m = 0.02;
-  config.map.background_resolution = 256;
+  Config config = test_scene::smallSceneConfig();
   config.objects.hidden_fraction = hidden_fraction;
   cl::Context ctx(config.cl);
   io::synth::SynthOptions so;
@@ -105,15 +83,7 @@ BoxRun runScene(double hidden_fraction) {
   }();
   while (src.next(f)) {
     std::vector<io::Detection> dets;
-    if (f.index == 0) {
-      io::Detection det;
-      det.id = 1;
-      det.class_name = "box";
-      det.score = 1.0f;
-      cv::Mat(f.instance_ids == kBoxId).convertTo(det.mask, CV_32F, 1.0 / 255);
-      det.box = cv::boundingRect(f.instance_ids == kBoxId);
-      dets.push_back(det);
-    }
+    if (f.index == 0) dets.push_back(test_scene::exactDetection(f, kBoxId));
     if (f.index >= kCoveredFirst && f.index <= kCoveredLast &&
         cv::countNonZero(f.instance_ids == kBoxId) < 0.05 * box_px0) {
       ++run.covered_frames_seen;

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "box_room_scene.h"
 #include "em/object_rules.h"
 #include "io/synth/synth_source.h"
 #include "pipeline/slam_system.h"
@@ -32,28 +33,7 @@ constexpr int kGroundTruthFrameTolerance = 3;
 constexpr int kReducedFrameTolerance = 1;
 
 io::synth::Scene leavingBoxScene() {
-  using io::synth::at;
-  io::synth::Scene s;
-  s.name = "leaving-box";
-  const io::synth::Material floor{
-      {0.3f, 0.45f, 0.6f}, {0.5f, 0.6f, 0.75f}, io::synth::Texture::kTiles, 0.4};
-  const io::synth::Material walls{
-      {0.8f, 0.85f, 0.88f}, {0.55f, 0.66f, 0.74f}, io::synth::Texture::kNoise, 0.3};
-  const io::synth::Material solid{
-      {0.3f, 0.3f, 0.7f}, {0.3f, 0.3f, 0.7f}, io::synth::Texture::kSolid, 1.0};
-  s.statics.push_back(io::synth::makePlane(at(0, 0, 0), floor));
-  s.statics.push_back(io::synth::makeRoom({3.0, 2.5, 1.5}, at(0, 0.5, 1.3), walls));
-  // Static structure for the camera to track against while it turns.
-  for (int i = 0; i < 5; ++i) {
-    s.statics.push_back(io::synth::makeBox({0.15, 0.15, 0.3 + 0.1 * i},
-                                           at(-1.2 + 0.8 * i, 2.2, 0.3 + 0.1 * i, 0.3 * i), solid));
-  }
-  io::synth::SceneObject box;
-  box.id = kObjectId;
-  box.class_name = "box";
-  box.parts.push_back(io::synth::makeBox({0.2, 0.2, 0.2}, at(0, 0, 0.2), solid));
-  box.trajectory.origin_m = Eigen::Vector3d(-0.3, 0.6, 0);
-  s.objects.push_back(box);
+  io::synth::Scene s = test_scene::boxRoomScene("leaving-box", kObjectId, -0.3, 0.6);
   // The camera stands 2 m in front of the box and turns right by about 45 deg between 0.2 s
   // and 1.6 s: the box leaves through the left image border.
   s.camera.path.origin_m = Eigen::Vector3d(0, -1.5, 1.2);
@@ -71,10 +51,7 @@ struct Deletion {
 // Runs the scene with the box detected (its exact silhouette) on frame 0; the frame and reason
 // of the box's deletion, if it was deleted.
 Deletion runScene(int visibility_width, int* lost_frames) {
-  Config config;
-  config.map.memory_mb = 64;
-  config.map.background_voxel_m = 0.02;
-  config.map.background_resolution = 256;
+  Config config = test_scene::smallSceneConfig();
   config.objects.visibility_width = visibility_width;
   cl::Context ctx(config.cl);
   io::synth::SynthOptions so;
@@ -87,15 +64,7 @@ Deletion runScene(int visibility_width, int* lost_frames) {
   io::Frame f;
   while (src.next(f)) {
     std::vector<io::Detection> dets;
-    if (f.index == 0) {
-      io::Detection det;
-      det.id = 1;
-      det.class_name = "box";
-      det.score = 1.0f;
-      cv::Mat(f.instance_ids == kObjectId).convertTo(det.mask, CV_32F, 1.0 / 255);
-      det.box = cv::boundingRect(f.instance_ids == kObjectId);
-      dets.push_back(det);
-    }
+    if (f.index == 0) dets.push_back(test_scene::exactDetection(f, kObjectId));
     const FrameOutcome out = slam.process(f, f.index == 0 ? &dets : nullptr);
     if (out.lost) ++*lost_frames;
     for (const ObjectOutcome& o : out.objects) {

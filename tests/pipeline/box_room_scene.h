@@ -1,0 +1,66 @@
+// A small synthetic scene for pipeline tests of one object: a room (floor, walls and five static
+// pillars for the camera to track against) with a 20 cm box standing on the floor, plus the
+// box's exact silhouette as a detection and the SLAM options these tests share. The tests add
+// their own camera path and further objects.
+#pragma once
+
+#include <opencv2/imgproc.hpp>
+#include <string>
+
+#include "common/config.h"
+#include "io/frame.h"
+#include "io/synth/scene.h"
+
+namespace emf::pipeline::test_scene {
+
+inline io::synth::Material solidMaterial(float r, float g, float b) {
+  return {{r, g, b}, {r, g, b}, io::synth::Texture::kSolid, 1.0};
+}
+
+/// The room with the box (object `box_id`, class "box") at (x, y) on the floor.
+inline io::synth::Scene boxRoomScene(const std::string& name, int box_id, double box_x,
+                                     double box_y) {
+  using io::synth::at;
+  io::synth::Scene s;
+  s.name = name;
+  const io::synth::Material floor{
+      {0.3f, 0.45f, 0.6f}, {0.5f, 0.6f, 0.75f}, io::synth::Texture::kTiles, 0.4};
+  const io::synth::Material walls{
+      {0.8f, 0.85f, 0.88f}, {0.55f, 0.66f, 0.74f}, io::synth::Texture::kNoise, 0.3};
+  const io::synth::Material solid = solidMaterial(0.3f, 0.3f, 0.7f);
+  s.statics.push_back(io::synth::makePlane(at(0, 0, 0), floor));
+  s.statics.push_back(io::synth::makeRoom({3.0, 2.5, 1.5}, at(0, 0.5, 1.3), walls));
+  for (int i = 0; i < 5; ++i) {
+    s.statics.push_back(io::synth::makeBox({0.15, 0.15, 0.3 + 0.1 * i},
+                                           at(-1.2 + 0.8 * i, 2.2, 0.3 + 0.1 * i, 0.3 * i), solid));
+  }
+  io::synth::SceneObject box;
+  box.id = box_id;
+  box.class_name = "box";
+  box.parts.push_back(io::synth::makeBox({0.2, 0.2, 0.2}, at(0, 0, 0.2), solid));
+  box.trajectory.origin_m = Eigen::Vector3d(box_x, box_y, 0);
+  s.objects.push_back(box);
+  return s;
+}
+
+/// Object `id`'s exact silhouette in a synthetic frame as a detection of class "box".
+inline io::Detection exactDetection(const io::Frame& f, int id) {
+  io::Detection det;
+  det.id = 1;
+  det.class_name = "box";
+  det.score = 1.0f;
+  cv::Mat(f.instance_ids == id).convertTo(det.mask, CV_32F, 1.0 / 255);
+  det.box = cv::boundingRect(f.instance_ids == id);
+  return det;
+}
+
+/// A 64 MiB pool and a 5.12 m background at 2 cm: room enough for the small scene.
+inline Config smallSceneConfig() {
+  Config config;
+  config.map.memory_mb = 64;
+  config.map.background_voxel_m = 0.02;
+  config.map.background_resolution = 256;
+  return config;
+}
+
+}  // namespace emf::pipeline::test_scene
