@@ -370,10 +370,12 @@ void SlamSystem::checkVisibility(const cv::Mat& depth) {
   const std::string at = scaled ? " (ray cast at " + std::to_string(visibility_k_.width) + "x" +
                                       std::to_string(visibility_k_.height) + ")"
                                 : std::string();
-  cv::Mat measured = depth;
+  // The images live in members: their buffers are reused from frame to frame.
+  const cv::Mat* measured = &depth;
   if (scaled) {
-    cv::resize(depth, measured, cv::Size(visibility_k_.width, visibility_k_.height), 0, 0,
-               cv::INTER_NEAREST);
+    cv::resize(depth, visibility_measured_, cv::Size(visibility_k_.width, visibility_k_.height), 0,
+               0, cv::INTER_NEAREST);
+    measured = &visibility_measured_;
   }
   for (size_t k = objects_.size(); k-- > 0;) {
     TrackedObject& o = objects_[k];
@@ -391,10 +393,11 @@ void SlamSystem::checkVisibility(const cv::Mat& depth) {
       continue;
     }
     raycaster_.render({{o.volume.get(), o.id, 0.0f}}, visibility_k_, T_world_camera_);
-    cv::Mat rendered_depth, ids, hidden_mask;
-    raycaster_.download(&rendered_depth, nullptr, &ids);
-    const em::Occlusion occ = em::occlusion(rendered_depth, measured, o.volume->spec().truncation_m,
-                                            config_.track.inlier_noise_per_m2, &hidden_mask);
+    cv::Mat& ids = visibility_ids_;
+    raycaster_.download(&visibility_depth_, nullptr, &ids);
+    const em::Occlusion occ =
+        em::occlusion(visibility_depth_, *measured, o.volume->spec().truncation_m,
+                      config_.track.inlier_noise_per_m2, &hidden_mask_);
     // Only an object tracked (or held) up to now becomes hidden: one whose tracking failed may
     // have moved nearer than its stale pose, which looks the same; it stays lost.
     o.hidden = em::isHidden(occ, opt, o.hidden) &&
@@ -411,7 +414,7 @@ void SlamSystem::checkVisibility(const cv::Mat& depth) {
     }
     if (o.hidden || o.state != ObjectState::kTracked || estep_ids_.size() <= 1) continue;
     // Mean association over the pixels where the object is in front (hidden ones say nothing).
-    ids.setTo(-1, hidden_mask);
+    ids.setTo(-1, hidden_mask_);
     cv::Mat q = estep_.downloadQ(o.e_step_slot);
     if (scaled) cv::resize(q, q, ids.size(), 0, 0, cv::INTER_AREA);
     const double mean_q = em::meanAssociation(q, ids, o.id);

@@ -221,10 +221,12 @@ class SlamSystem {
   std::vector<io::Detection> unmatched_;    // this frame's detections that matched nothing
   std::vector<ObjectOutcome> deleted_now_;  // objects deleted in this frame
   cv::Mat last_ids_;  // object ids ray-cast for the last detection matching (frame size)
-  // The visibility rule's ray cast: its image size (objects.visibility_width) and its thresholds
-  // scaled to that size.
+  // The visibility rule's ray cast: its image size (objects.visibility_width), its thresholds
+  // scaled to that size, and the images of each object's cast (kept to reuse their buffers):
+  // depth, ids, hidden pixels, and the frame's depth at that size.
   io::Intrinsics visibility_k_;
   em::ObjectOptions visibility_options_;
+  cv::Mat visibility_depth_, visibility_ids_, hidden_mask_, visibility_measured_;
   int next_object_id_ = 1;
   std::function<void(const TrackedObject&)> deletion_hook_;
   std::unique_ptr<DetectorScheduler> scheduler_;  // null without a detector plugin
