@@ -15,6 +15,7 @@
 // axes), the mean ground-truth motion per frame, and one line
 //   track_bias data=.. frames=.. reverse=0|1 bias_mm=x,y,z bias_deg=x,y,z motion_mm=x,y,z
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
