@@ -6,11 +6,16 @@
 // tracked pose's deviation from the ground truth, in the camera frame, is a per-frame tracking
 // error with a perfect history; its mean over the frames is the tracker's bias on this data.
 // --reverse plays the frames backwards (the camera moves the other way through the same
-// views): a bias that flips sign with it follows the motion, not the scene.
+// views): a bias that flips sign with it follows the motion, not the scene. --track-data tracks
+// the frames of a second folder with the same poses (e.g. the same `emf synth` preset with
+// --no-noise) against the map fused from --data: noise in the map and in the frames apart.
 //
-//   track_bias --data DIR [--frames N] [--reverse] [--depth-scale S] [--truncation-voxels T]
-//              [--huber F] [--per-frame]
+//   track_bias --data DIR [--track-data DIR2] [--frames N] [--reverse] [--depth-scale S]
+//              [--set SECTION.KEY=VALUE]... [--per-frame] [--decompose]
 //
+// --set overrides a configuration default (e.g. preprocess.hole_margin_px=1). --decompose adds,
+// per pixel class (within 2 px of a depth jump or a hole; others nearer / farther than 3 m),
+// the first-order pose shift -H^-1 g_class at the ground truth: which pixels pull the pose.
 // Prints the mean and standard deviation of the deviation (mm, degrees about the camera's
 // axes), the mean ground-truth motion per frame, and one line
 //   track_bias data=.. frames=.. reverse=0|1 bias_mm=x,y,z bias_deg=x,y,z motion_mm=x,y,z
@@ -20,6 +25,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
 
@@ -27,6 +33,7 @@
 #include "common/config.h"
 #include "common/error.h"
 #include "io/frame_source.h"
+#include "map/device_image.h"
 #include "map/volume.h"
 #include "map/voxel_pool.h"
 #include "pipeline/slam_system.h"
@@ -37,18 +44,20 @@ namespace {
 
 struct Args {
   std::string data;
+  std::string track_data;  // optional: the frames to track come from here (same poses)
   int frames = 0;
   bool reverse = false;
   bool per_frame = false;
-  double depth_scale = 0.0;  // 0: the source's default
-  int truncation_voxels = 0;
-  double huber = 0.0;
+  bool decompose = false;
+  double depth_scale = 0.0;       // 0: the source's default
+  std::vector<std::string> sets;  // section.key=value overrides of the defaults
 };
 
 [[noreturn]] void usage(const std::string& message) {
   std::cerr << "track_bias: " << message
-            << "\nusage: track_bias --data DIR [--frames N] [--reverse] [--depth-scale S] "
-               "[--truncation-voxels T] [--huber F] [--per-frame]\n";
+            << "\nusage: track_bias --data DIR [--track-data DIR2] [--frames N] [--reverse] "
+               "[--depth-scale S] "
+               "[--set SECTION.KEY=VALUE]... [--per-frame] [--decompose]\n";
   std::exit(2);
 }
 
@@ -70,16 +79,18 @@ Args parse(int argc, char** argv) {
       a.reverse = true;
     } else if (o == "--per-frame") {
       a.per_frame = true;
+    } else if (o == "--decompose") {
+      a.decompose = true;
     } else if (o == "--data" && has_value) {
       a.data = argv[++i];
+    } else if (o == "--track-data" && has_value) {
+      a.track_data = argv[++i];
     } else if (o == "--frames" && has_value) {
       a.frames = static_cast<int>(number(o, argv[++i]));
     } else if (o == "--depth-scale" && has_value) {
       a.depth_scale = number(o, argv[++i]);
-    } else if (o == "--truncation-voxels" && has_value) {
-      a.truncation_voxels = static_cast<int>(number(o, argv[++i]));
-    } else if (o == "--huber" && has_value) {
-      a.huber = number(o, argv[++i]);
+    } else if (o == "--set" && has_value) {
+      a.sets.push_back(argv[++i]);
     } else if (o == "--help" || o == "-h") {
       usage("help");
     } else {
@@ -109,6 +120,39 @@ struct Stats {
   double sd(int k) const { return std::sqrt(std::max(0.0, sq[k] / n - mean(k) * mean(k))); }
 };
 
+/// Pixel classes of --decompose, from a depth image: 0 within 2 px of a depth jump (> 5 % of
+/// the depth to a 4-neighbour, or an invalid one), 1 other pixels nearer than 3 m, 2 the rest.
+constexpr int kClasses = 3;
+const char* const kClassNames[kClasses] = {"depth edges (2 px)", "other, z < 3 m",
+                                           "other, z >= 3 m"};
+
+cv::Mat classify(const cv::Mat& depth, int radius = 2) {  // radius: of the dilation
+  cv::Mat jump(depth.size(), CV_8U, cv::Scalar(0));
+  for (int v = 0; v < depth.rows; ++v) {
+    for (int u = 0; u < depth.cols; ++u) {
+      const float z = depth.at<float>(v, u);
+      if (!(z > 0.0f)) continue;
+      const int du[4] = {1, -1, 0, 0}, dv[4] = {0, 0, 1, -1};
+      for (int n = 0; n < 4; ++n) {
+        const int uu = u + du[n], vv = v + dv[n];
+        if (uu < 0 || vv < 0 || uu >= depth.cols || vv >= depth.rows) continue;
+        const float zn = depth.at<float>(vv, uu);
+        if (!(zn > 0.0f) || std::abs(zn - z) > 0.05f * z) jump.at<uint8_t>(v, u) = 255;
+      }
+    }
+  }
+  cv::Mat near_jump;
+  cv::dilate(jump, near_jump, cv::Mat::ones(2 * radius + 1, 2 * radius + 1, CV_8U));
+  cv::Mat classes(depth.size(), CV_8U);
+  for (int v = 0; v < depth.rows; ++v) {
+    for (int u = 0; u < depth.cols; ++u) {
+      const float z = depth.at<float>(v, u);
+      classes.at<uint8_t>(v, u) = near_jump.at<uint8_t>(v, u) ? 0 : (z < 3.0f ? 1 : 2);
+    }
+  }
+  return classes;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -116,22 +160,43 @@ int main(int argc, char** argv) {
   try {
     emf::Config config;
     if (args.depth_scale > 0) config.source.depth_scale = args.depth_scale;
-    if (args.truncation_voxels > 0) config.map.truncation_voxels = args.truncation_voxels;
-    if (args.huber > 0) config.track.huber_truncation_factor = args.huber;
-    auto source = emf::io::openSource("tum:" + args.data, config.source);
-    const emf::io::Intrinsics k = source->intrinsics();
-    std::vector<emf::io::Frame> frames;
-    emf::io::Frame f;
-    while ((args.frames <= 0 || static_cast<int>(frames.size()) < args.frames) && source->next(f)) {
-      if (!f.T_world_camera_gt) {
-        throw emf::IoError(args.data + ": frame " + std::to_string(f.index) +
-                           " has no ground-truth pose (groundtruth.txt must cover every frame)");
+    for (const auto& assignment : args.sets) config.set(assignment);
+    const auto load = [&](const std::string& dir, emf::io::Intrinsics* k) {
+      auto source = emf::io::openSource("tum:" + dir, config.source);
+      *k = source->intrinsics();
+      std::vector<emf::io::Frame> frames;
+      emf::io::Frame f;
+      while ((args.frames <= 0 || static_cast<int>(frames.size()) < args.frames) &&
+             source->next(f)) {
+        if (!f.T_world_camera_gt) {
+          throw emf::IoError(dir + ": frame " + std::to_string(f.index) +
+                             " has no ground-truth pose (groundtruth.txt must cover every frame)");
+        }
+        frames.push_back(f);
+        frames.back().depth = f.depth.clone();
       }
-      frames.push_back(f);
-      frames.back().depth = f.depth.clone();
+      if (frames.size() < 3) throw emf::IoError(dir + ": fewer than 3 frames");
+      if (args.reverse) std::reverse(frames.begin(), frames.end());
+      return frames;
+    };
+    emf::io::Intrinsics k;
+    const std::vector<emf::io::Frame> frames = load(args.data, &k);
+    std::vector<emf::io::Frame> tracked_frames;
+    if (!args.track_data.empty()) {
+      emf::io::Intrinsics k2;
+      tracked_frames = load(args.track_data, &k2);
+      if (k2.width != k.width || k2.height != k.height || tracked_frames.size() != frames.size()) {
+        throw emf::IoError(args.track_data + ": not the same frame count and size as " + args.data);
+      }
+      for (size_t i = 0; i < frames.size(); ++i) {
+        if (std::abs(tracked_frames[i].timestamp - frames[i].timestamp) > 1e-3) {
+          throw emf::IoError(args.track_data + ": frame " + std::to_string(i) +
+                             " has another timestamp than in " + args.data);
+        }
+      }
     }
-    if (frames.size() < 3) throw emf::IoError(args.data + ": fewer than 3 frames");
-    if (args.reverse) std::reverse(frames.begin(), frames.end());
+    const std::vector<emf::io::Frame>& track_frames =
+        tracked_frames.empty() ? frames : tracked_frames;
 
     emf::cl::Context ctx{config.cl};
     emf::map::VoxelPool pool(ctx, config.map);
@@ -144,8 +209,12 @@ int main(int argc, char** argv) {
 
     Stats stats;
     int lost = 0;
+    // --decompose: per pixel class, the first-order pose shift -H^-1 g_class at the ground truth
+    // (H of all pixels), i.e. what each class contributes to the deviation.
+    emf::map::DeviceImage q_image(ctx, k.width, k.height);
+    std::vector<Stats> class_stats(kClasses);
     for (size_t i = 0; i < frames.size(); ++i) {
-      pre.process(frames[i].depth);
+      pre.process(track_frames[i].depth);
       const Eigen::Isometry3d& G = *frames[i].T_world_camera_gt;
       if (i >= 2) {
         const Eigen::Isometry3d& G1 = *frames[i - 1].T_world_camera_gt;
@@ -162,12 +231,42 @@ int main(int argc, char** argv) {
           Eigen::Matrix<double, 9, 1> v;
           v << d.translation() * 1000.0, rotationDeg(d.rotation()), m.translation() * 1000.0;
           stats.add(v);
+          if (args.decompose) {
+            const Eigen::Isometry3d T_gt = T_wv.inverse() * G;
+            const cv::Mat classes = classify(frames[i].depth);
+            const int stride = config.track.pixel_stride;
+            const emf::track::NormalEquations all = tracker.evaluate(
+                emf::pipeline::deviceView(volume), pre.vertexMap().get(), nullptr, T_gt, stride);
+            for (int c = 0; c < kClasses; ++c) {
+              cv::Mat q;
+              cv::compare(classes, c, q, cv::CMP_EQ);
+              q.convertTo(q, CV_32F, 1.0 / 255.0);
+              q_image.upload(q, "class mask");
+              const emf::track::NormalEquations part =
+                  tracker.evaluate(emf::pipeline::deviceView(volume), pre.vertexMap().get(),
+                                   q_image.buffer().get(), T_gt, stride);
+              // Increment (v, w) of the volume-frame pose, left-multiplied: T = exp(x) T_gt.
+              const emf::track::Vector6d x = -all.H.ldlt().solve(part.g);
+              Eigen::Isometry3d inc = Eigen::Isometry3d::Identity();
+              inc.linear() = Eigen::AngleAxisd(x.tail<3>().norm(), x.tail<3>().norm() > 0
+                                                                       ? x.tail<3>().normalized()
+                                                                       : Eigen::Vector3d::UnitX())
+                                 .toRotationMatrix();
+              inc.translation() = x.head<3>();
+              const Eigen::Isometry3d shift = T_gt.inverse() * inc * T_gt;
+              Eigen::Matrix<double, 9, 1> cv_;
+              cv_ << shift.translation() * 1000.0, rotationDeg(shift.rotation()),
+                  Eigen::Vector3d(part.valid, 0, 0);
+              class_stats[static_cast<size_t>(c)].add(cv_);
+            }
+          }
           if (args.per_frame) {
             std::printf("frame %zu dev_mm %+.3f %+.3f %+.3f dev_deg %+.4f %+.4f %+.4f\n", i, v[0],
                         v[1], v[2], v[3], v[4], v[5]);
           }
         }
       }
+      if (!tracked_frames.empty()) pre.process(frames[i].depth);
       emf::map::IntegrationInput in;
       in.depth = &pre.inputDepth();
       in.intrinsics = k;
@@ -182,6 +281,16 @@ int main(int argc, char** argv) {
     for (int c = 0; c < 6; ++c) {
       std::printf("  deviation %-12s mean %+8.4f  sd %7.4f\n", names[c], stats.mean(c),
                   stats.sd(c));
+    }
+    if (args.decompose) {
+      for (int c = 0; c < kClasses; ++c) {
+        const Stats& cs = class_stats[static_cast<size_t>(c)];
+        std::printf(
+            "  first-order shift from %-20s (%6.0f px): %+7.3f %+7.3f %+7.3f mm  %+.4f %+.4f %+.4f "
+            "deg\n",
+            kClassNames[c], cs.mean(6), cs.mean(0), cs.mean(1), cs.mean(2), cs.mean(3), cs.mean(4),
+            cs.mean(5));
+      }
     }
     std::printf("  ground-truth motion per frame (mm, camera frame): %+.3f %+.3f %+.3f\n",
                 stats.mean(6), stats.mean(7), stats.mean(8));

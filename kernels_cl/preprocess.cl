@@ -9,6 +9,28 @@
 // camera frame (x right, y down, z forward), (NaN, NaN, NaN, 0) when invalid.
 #include "common.clh"
 
+// Hole margin (PreprocessOptions::hole_margin_px): a pixel keeps its depth only when no pixel
+// within `radius` (Chebyshev distance) of it lacks depth (NaN or <= 0); pixels outside the image
+// do not count. One work item per pixel.
+__kernel void drop_hole_margin(__global const float* depth_in, __global float* depth_out,
+                               const int width, const int height, const int radius) {
+  const int u = get_global_id(0);
+  const int v = get_global_id(1);
+  if (u >= width || v >= height) return;
+  float d = depth_in[v * width + u];
+  for (int dv = -radius; dv <= radius; ++dv) {
+    const int vv = v + dv;
+    if (vv < 0 || vv >= height) continue;
+    for (int du = -radius; du <= radius; ++du) {
+      const int uu = u + du;
+      if (uu < 0 || uu >= width) continue;
+      // Not (x > 0): NaN and <= 0 are holes.
+      if (!(depth_in[vv * width + uu] > 0.0f)) d = NAN;
+    }
+  }
+  depth_out[v * width + u] = d;
+}
+
 inline bool emf_depth_in_range(float d, float min_depth, float max_depth) {
   return emf_is_valid(d) && d > 0.0f && d >= min_depth && d <= max_depth;
 }

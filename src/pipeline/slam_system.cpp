@@ -54,6 +54,7 @@ track::PreprocessOptions objectPreprocessOptions(const Config& config) {
     // silhouettes at 320x240 (bear 2.5 -> 3.0 cm, chair 1.1 -> 3.9 cm; cars at 640x480 1.9-2.0 ->
     // 1.8-1.9 cm).
     o.sigma_depth_per_m2 = 0.0;
+    o.hole_margin_px = config.objects.depth_hole_margin_px;
   }
   return o;
 }

@@ -45,11 +45,30 @@ void validatePreprocessOptions(const PreprocessOptions& o) {
   }
 }
 
-PreprocessedFrame preprocessReference(const cv::Mat& depth_m, const io::Intrinsics& k,
+cv::Mat dropHoleMarginReference(const cv::Mat& depth_m, int radius) {
+  CV_Assert(depth_m.type() == CV_32F);
+  cv::Mat out = depth_m.clone();
+  if (radius <= 0) return out;
+  for (int v = 0; v < depth_m.rows; ++v) {
+    for (int u = 0; u < depth_m.cols; ++u) {
+      if (depth_m.at<float>(v, u) > 0.0f) continue;  // a valid pixel is no hole
+      // A hole (NaN or <= 0): every pixel within the radius loses its depth.
+      for (int vv = std::max(0, v - radius); vv <= std::min(depth_m.rows - 1, v + radius); ++vv) {
+        for (int uu = std::max(0, u - radius); uu <= std::min(depth_m.cols - 1, u + radius); ++uu) {
+          out.at<float>(vv, uu) = kNaN;
+        }
+      }
+    }
+  }
+  return out;
+}
+
+PreprocessedFrame preprocessReference(const cv::Mat& input_m, const io::Intrinsics& k,
                                       const PreprocessOptions& o) {
   checkIntrinsics(k);
-  checkDepth(depth_m, k);
+  checkDepth(input_m, k);
   validatePreprocessOptions(o);
+  const cv::Mat depth_m = dropHoleMarginReference(input_m, o.hole_margin_px);
   const int w = k.width, h = k.height, r = o.bilateral_radius_px;
   const float min_d = static_cast<float>(o.min_depth_m);
   const float max_d = static_cast<float>(o.max_depth_m);
@@ -104,6 +123,11 @@ Preprocessor::Preprocessor(cl::Context& ctx, const PreprocessOptions& options,
   const size_t n = static_cast<size_t>(intrinsics_.width) * intrinsics_.height;
   kernel_ = ctx_.kernel("preprocess", "preprocess_depth",
                         "-DPRE_RADIUS=" + std::to_string(options_.bilateral_radius_px));
+  if (options_.hole_margin_px > 0) {
+    margin_kernel_ = ctx_.kernel("preprocess", "drop_hole_margin",
+                                 "-DPRE_RADIUS=" + std::to_string(options_.bilateral_radius_px));
+    margin_ = ctx_.buffer(CL_MEM_READ_WRITE, n * sizeof(float));
+  }
   input_ = ctx_.buffer(CL_MEM_READ_ONLY, n * sizeof(float));
   filtered_ = ctx_.buffer(CL_MEM_READ_WRITE, n * sizeof(float));
   vertex_ = ctx_.buffer(CL_MEM_READ_WRITE, n * 4 * sizeof(float));
@@ -121,8 +145,16 @@ void Preprocessor::process(const cv::Mat& depth_m) {
   process(input_.get());
 }
 
-void Preprocessor::process(cl_mem depth_m) {
+void Preprocessor::process(cl_mem input_m) {
   const auto& o = options_;
+  cl_mem depth_m = input_m;
+  if (o.hole_margin_px > 0) {
+    cl::setArgs(margin_kernel_, input_m, margin_.get(), intrinsics_.width, intrinsics_.height,
+                o.hole_margin_px);
+    cl::enqueue(ctx_.queue(), margin_kernel_, static_cast<size_t>(intrinsics_.width),
+                static_cast<size_t>(intrinsics_.height), 0, 16, 8);
+    depth_m = margin_.get();
+  }
   const float inv_s = static_cast<float>(1.0 / (2.0 * o.sigma_space_px * o.sigma_space_px));
   cl::setArgs(kernel_, depth_m, filtered_.get(), vertex_.get(), intrinsics_.width,
               intrinsics_.height, inv_s, static_cast<float>(o.sigma_depth_m),

@@ -17,7 +17,12 @@ struct PreprocessedFrame {
   cv::Mat vertex;   // CV_32FC4 camera-frame points (x, y, z, 1) in metres; (NaN x3, 0) invalid
 };
 
-/// CPU reference of the preprocess_depth kernel. `depth_m`: CV_32F metres, NaN or 0 = invalid.
+/// CPU reference of the drop_hole_margin kernel: `depth_m` (CV_32F) with every pixel within
+/// `radius` (Chebyshev) of a pixel without depth (NaN or <= 0) set to NaN.
+cv::Mat dropHoleMarginReference(const cv::Mat& depth_m, int radius);
+
+/// CPU reference of the preprocessing (hole margin, then the preprocess_depth kernel).
+/// `depth_m`: CV_32F metres, NaN or 0 = invalid.
 PreprocessedFrame preprocessReference(const cv::Mat& depth_m, const io::Intrinsics& intrinsics,
                                       const PreprocessOptions& options);
 
@@ -36,15 +41,17 @@ class Preprocessor {
   /// Copies `depth_m` (CV_32F metres, intrinsics' size) into the input buffer and runs the
   /// kernel. Throws InvalidArgument naming the expected size/type on mismatch.
   void process(const cv::Mat& depth_m);
-  /// Runs the kernel on a device buffer of width * height floats (metres) already filled.
+  /// Runs the hole margin and the filter on a device buffer of width * height floats (metres)
+  /// already filled (read, not modified).
   void process(cl_mem depth_m);
 
   /// float4 per pixel (camera frame, metres; w = 0 invalid), width * height, row-major.
   const cl::MemHandle& vertexMap() const { return vertex_; }
   /// float per pixel, filtered depth in metres (NaN invalid).
   const cl::MemHandle& filteredDepth() const { return filtered_; }
-  /// The input buffer used by process(const cv::Mat&).
-  const cl::MemHandle& inputDepth() const { return input_; }
+  /// The depth the filter read: the input with the hole margin dropped (NaN), metres. What the
+  /// map integrates. With hole_margin_px 0 it is the input buffer of process(const cv::Mat&).
+  const cl::MemHandle& inputDepth() const { return options_.hole_margin_px > 0 ? margin_ : input_; }
 
   /// Blocking read-back of the results (tests, debugging, exporters).
   PreprocessedFrame download() const;
@@ -56,7 +63,9 @@ class Preprocessor {
   PreprocessOptions options_;
   io::Intrinsics intrinsics_;
   cl::KernelHandle kernel_;
+  cl::KernelHandle margin_kernel_;
   cl::MemHandle input_;
+  cl::MemHandle margin_;  // the input without its hole margin (hole_margin_px > 0)
   cl::MemHandle filtered_;
   cl::MemHandle vertex_;
 };

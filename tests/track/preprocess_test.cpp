@@ -54,12 +54,17 @@ TEST_F(Preprocess, RealKinectDepthMatchesReference) {
   const cv::Mat depth =
       test::readDepthPng(test::dataPath("tum-fr1-xyz-pairs/case_1/dep_prev.png"), 5000.0);
   PreprocessOptions o;  // defaults: range sigma 0.04 m + 0.01 z^2, 4.5 px, 7x7
+  o.hole_margin_px = 1;
   const int valid = compareWithReference(ctx(), depth, test::kinectCamera(), o);
-  // The frame has holes (zeros) that must stay invalid; most of it is valid.
+  // The frame has holes (zeros) that must stay invalid, and so must the pixels next to them;
+  // most of it is valid.
   const int raw_valid = cv::countNonZero(depth == depth);
-  EXPECT_EQ(valid, raw_valid);
+  const cv::Mat kept = dropHoleMarginReference(depth, o.hole_margin_px);
+  EXPECT_EQ(valid, cv::countNonZero(kept == kept));
+  EXPECT_LT(valid, raw_valid);
   EXPECT_GT(valid, 640 * 480 / 2);
-  EXPECT_LT(valid, 640 * 480);
+  o.hole_margin_px = 0;
+  EXPECT_EQ(compareWithReference(ctx(), depth, test::kinectCamera(), o), raw_valid);
 }
 
 TEST_F(Preprocess, RealDepthWithRangeLimitsMatchesReference) {
@@ -68,9 +73,12 @@ TEST_F(Preprocess, RealDepthWithRangeLimitsMatchesReference) {
   PreprocessOptions o;
   o.min_depth_m = 1.0;
   o.max_depth_m = 2.0;
+  o.hole_margin_px = 1;
   const int valid = compareWithReference(ctx(), depth, test::kinectCamera(), o);
+  // Depth out of range is no hole: only the pixels next to missing depth lose theirs.
+  const cv::Mat kept = dropHoleMarginReference(depth, o.hole_margin_px);
   int in_range = 0;
-  for (auto it = depth.begin<float>(); it != depth.end<float>(); ++it) {
+  for (auto it = kept.begin<float>(); it != kept.end<float>(); ++it) {
     in_range += (*it >= 1.0f && *it <= 2.0f) ? 1 : 0;
   }
   EXPECT_EQ(valid, in_range);
@@ -122,6 +130,9 @@ TEST_F(Preprocess, ConstructedEdgesAndHolesMatchReference) {
   k.height = h;
   const cv::Mat depth = constructedDepth(w, h);
   PreprocessOptions o;
+  // Without the hole margin (the default) first: the negative depth among the range-limit cases
+  // is a hole, and a margin would drop the neighbours whose filtered depth tests the range checks.
+  ASSERT_EQ(o.hole_margin_px, 0);
   compareWithReference(ctx(), depth, k, o);
   o.min_depth_m = 0.0;  // no minimum: only d > 0 is valid
   compareWithReference(ctx(), depth, k, o);
@@ -136,6 +147,43 @@ TEST_F(Preprocess, ConstructedEdgesAndHolesMatchReference) {
   compareWithReference(ctx(), depth, k, o);
   o.sigma_depth_per_m2 = 0.5;
   compareWithReference(ctx(), depth, k, o);
+  for (const int margin : {1, 2, 5}) {
+    o.hole_margin_px = margin;
+    compareWithReference(ctx(), depth, k, o);
+  }
+}
+
+// The hole margin of the reference on a constructed image: the pixels within the margin of a
+// NaN or non-positive depth lose theirs; the image border, depth out of range and the pixels
+// beyond the margin keep theirs. Margin 0 changes nothing.
+TEST(PreprocessReference, HoleMarginDropsThePixelsNextToMissingDepthOnly) {
+  cv::Mat d(12, 20, CV_32F, cv::Scalar(1.5f));
+  d.at<float>(5, 6) = kNaN;
+  d.at<float>(2, 15) = 0.0f;
+  d.at<float>(9, 15) = -1.0f;
+  d.at<float>(9, 2) = 9.0f;  // beyond any max depth: not a hole
+  for (const int margin : {0, 1, 2}) {
+    const cv::Mat out = dropHoleMarginReference(d, margin);
+    for (int v = 0; v < d.rows; ++v) {
+      for (int u = 0; u < d.cols; ++u) {
+        const auto near = [&](int hu, int hv) {
+          return std::abs(u - hu) <= margin && std::abs(v - hv) <= margin;
+        };
+        const bool dropped = margin > 0 && (near(6, 5) || near(15, 2) || near(15, 9));
+        const float expected = dropped ? kNaN : d.at<float>(v, u);
+        if (std::isnan(expected)) {
+          EXPECT_TRUE(std::isnan(out.at<float>(v, u)))
+              << "margin " << margin << ", pixel (" << u << "," << v << ")";
+        } else {
+          EXPECT_EQ(out.at<float>(v, u), expected)
+              << "margin " << margin << ", pixel (" << u << "," << v << ")";
+        }
+      }
+    }
+  }
+  // The frame's own border is no hole.
+  EXPECT_EQ(dropHoleMarginReference(cv::Mat(4, 4, CV_32F, cv::Scalar(2.0f)), 2).at<float>(0, 0),
+            2.0f);
 }
 
 TEST(PreprocessReference, SemanticsOnConstructedDepth) {
