@@ -37,9 +37,11 @@ struct PreprocessOptions {
   /// offset becomes a drift while the camera explores: occlusion preset, 600 frames, camera ATE
   /// 1.37 -> 0.57 cm at 640x480 and 1.99 -> 0.98 cm at 320x240 with 1; redkitchen unchanged
   /// (bench/slam_bench 2.218 -> 2.216 cm).
-  /// Not the default: the same pixels are much of what holds the camera against a large mover
-  /// nobody detected, and with 1 the undetected panel of tests/pipeline/slam_occlusion_test.cpp
-  /// drags the camera 0.82 m along (seeds 1-5; 2.4-3.9 cm at most with 0, then recovered).
+  /// Not the default: with the synthetic sensor's edge dropouts, holes line every depth edge
+  /// and a margin of 1 removes 90 % of the edge pixels (6 % of all), which are what holds the
+  /// camera against a large mover nobody detected: the undetected panel of
+  /// tests/pipeline/slam_occlusion_test.cpp drags the camera 0.82 m along with 1 (seeds 1-5;
+  /// 2.4-3.9 cm at most with 0, then recovered).
   int hole_margin_px = 0;
 
   void bind(OptionBinder& b) {
