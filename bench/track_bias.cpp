@@ -14,8 +14,9 @@
 //              [--set SECTION.KEY=VALUE]... [--per-frame] [--decompose]
 //
 // --set overrides a configuration default (e.g. preprocess.hole_margin_px=1). --decompose adds,
-// per pixel class (within 2 px of a depth jump or a hole; others nearer / farther than 3 m),
-// the first-order pose shift -H^-1 g_class at the ground truth: which pixels pull the pose.
+// per pixel class (next to a hole on the background or foreground side of an edge, or inside a
+// surface; all others; see classify), the first-order pose shift -H^-1 g_class at the ground
+// truth: which pixels pull the pose.
 // Prints the mean and standard deviation of the deviation (mm, degrees about the camera's
 // axes), the mean ground-truth motion per frame, and one line
 //   track_bias data=.. frames=.. reverse=0|1 bias_mm=x,y,z bias_deg=x,y,z motion_mm=x,y,z
@@ -120,34 +121,38 @@ struct Stats {
   double sd(int k) const { return std::sqrt(std::max(0.0, sq[k] / n - mean(k) * mean(k))); }
 };
 
-/// Pixel classes of --decompose, from a depth image: 0 within 2 px of a depth jump (> 5 % of
-/// the depth to a 4-neighbour, or an invalid one), 1 other pixels nearer than 3 m, 2 the rest.
-constexpr int kClasses = 3;
-const char* const kClassNames[kClasses] = {"depth edges (2 px)", "other, z < 3 m",
-                                           "other, z >= 3 m"};
+/// Pixel classes of --decompose, from a depth image. A pixel within 1 px (8-neighbourhood) of a
+/// pixel without depth is "next to a hole"; of those, class 0 has a valid pixel more than 5 %
+/// nearer within 3 px (the background side of an edge), class 1 one more than 5 % farther (the
+/// foreground side), class 2 neither (dropouts inside a surface). Class 3: every other pixel.
+constexpr int kClasses = 4;
+const char* const kClassNames[kClasses] = {"hole, background side", "hole, foreground side",
+                                           "hole, no jump near", "other"};
 
-cv::Mat classify(const cv::Mat& depth, int radius = 2) {  // radius: of the dilation
-  cv::Mat jump(depth.size(), CV_8U, cv::Scalar(0));
+cv::Mat classify(const cv::Mat& depth) {
+  cv::Mat hole(depth.size(), CV_8U, cv::Scalar(0));
   for (int v = 0; v < depth.rows; ++v) {
     for (int u = 0; u < depth.cols; ++u) {
-      const float z = depth.at<float>(v, u);
-      if (!(z > 0.0f)) continue;
-      const int du[4] = {1, -1, 0, 0}, dv[4] = {0, 0, 1, -1};
-      for (int n = 0; n < 4; ++n) {
-        const int uu = u + du[n], vv = v + dv[n];
-        if (uu < 0 || vv < 0 || uu >= depth.cols || vv >= depth.rows) continue;
-        const float zn = depth.at<float>(vv, uu);
-        if (!(zn > 0.0f) || std::abs(zn - z) > 0.05f * z) jump.at<uint8_t>(v, u) = 255;
-      }
+      if (!(depth.at<float>(v, u) > 0.0f)) hole.at<uint8_t>(v, u) = 255;
     }
   }
-  cv::Mat near_jump;
-  cv::dilate(jump, near_jump, cv::Mat::ones(2 * radius + 1, 2 * radius + 1, CV_8U));
-  cv::Mat classes(depth.size(), CV_8U);
+  cv::Mat near_hole;
+  cv::dilate(hole, near_hole, cv::Mat::ones(3, 3, CV_8U));
+  cv::Mat classes(depth.size(), CV_8U, cv::Scalar(3));
   for (int v = 0; v < depth.rows; ++v) {
     for (int u = 0; u < depth.cols; ++u) {
       const float z = depth.at<float>(v, u);
-      classes.at<uint8_t>(v, u) = near_jump.at<uint8_t>(v, u) ? 0 : (z < 3.0f ? 1 : 2);
+      if (!near_hole.at<uint8_t>(v, u) || !(z > 0.0f)) continue;
+      bool nearer = false, farther = false;
+      for (int vv = std::max(0, v - 3); vv <= std::min(depth.rows - 1, v + 3); ++vv) {
+        for (int uu = std::max(0, u - 3); uu <= std::min(depth.cols - 1, u + 3); ++uu) {
+          const float zn = depth.at<float>(vv, uu);
+          if (!(zn > 0.0f)) continue;
+          nearer = nearer || zn < 0.95f * z;
+          farther = farther || zn > 1.05f * z;
+        }
+      }
+      classes.at<uint8_t>(v, u) = nearer ? 0 : (farther ? 1 : 2);
     }
   }
   return classes;
