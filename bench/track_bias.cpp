@@ -11,7 +11,13 @@
 // --no-noise) against the map fused from --data: noise in the map and in the frames apart.
 //
 //   track_bias --data DIR [--track-data DIR2] [--frames N] [--reverse] [--depth-scale S]
-//              [--set SECTION.KEY=VALUE]... [--per-frame] [--decompose]
+//              [--set SECTION.KEY=VALUE]... [--per-frame] [--decompose] [--prefuse]
+//              [--start-at-gt]
+//
+// Two controls: --prefuse fuses every frame first and then tracks each against the finished
+// map (a map that already holds the views ahead of the camera; the frame's own view is in it
+// too), and --start-at-gt starts each frame's tracking at its ground truth instead of the
+// prediction (a deviation that stays is where the cost has its minimum, not slow convergence).
 //
 // --set overrides a configuration default (e.g. preprocess.hole_margin_px=1). --decompose adds,
 // per pixel class (next to a hole on the background or foreground side of an edge, or inside a
@@ -50,15 +56,18 @@ struct Args {
   bool reverse = false;
   bool per_frame = false;
   bool decompose = false;
-  double depth_scale = 0.0;       // 0: the source's default
+  bool prefuse = false;      // fuse every frame first, then track each against the finished map
+  bool start_at_gt = false;  // start tracking at the ground truth, not the prediction
+  double depth_scale = 0.0;  // 0: the source's default
   std::vector<std::string> sets;  // section.key=value overrides of the defaults
 };
 
 [[noreturn]] void usage(const std::string& message) {
-  std::cerr << "track_bias: " << message
-            << "\nusage: track_bias --data DIR [--track-data DIR2] [--frames N] [--reverse] "
-               "[--depth-scale S] "
-               "[--set SECTION.KEY=VALUE]... [--per-frame] [--decompose]\n";
+  std::cerr
+      << "track_bias: " << message
+      << "\nusage: track_bias --data DIR [--track-data DIR2] [--frames N] [--reverse] "
+         "[--depth-scale S] "
+         "[--set SECTION.KEY=VALUE]... [--per-frame] [--decompose] [--prefuse] [--start-at-gt]\n";
   std::exit(2);
 }
 
@@ -82,6 +91,10 @@ Args parse(int argc, char** argv) {
       a.per_frame = true;
     } else if (o == "--decompose") {
       a.decompose = true;
+    } else if (o == "--prefuse") {
+      a.prefuse = true;
+    } else if (o == "--start-at-gt") {
+      a.start_at_gt = true;
     } else if (o == "--data" && has_value) {
       a.data = argv[++i];
     } else if (o == "--track-data" && has_value) {
@@ -223,13 +236,25 @@ int main(int argc, char** argv) {
     // (H of all pixels), i.e. what each class contributes to the deviation.
     emf::map::DeviceImage q_image(ctx, k.width, k.height);
     std::vector<Stats> class_stats(kClasses);
+    const auto fuse = [&](size_t i) {
+      if (!tracked_frames.empty() || args.prefuse) pre.process(frames[i].depth);
+      emf::map::IntegrationInput in;
+      in.depth = &pre.inputDepth();
+      in.intrinsics = k;
+      in.T_world_camera = *frames[i].T_world_camera_gt;
+      volume.fuse(in);
+    };
+    if (args.prefuse) {
+      for (size_t i = 0; i < frames.size(); ++i) fuse(i);
+    }
     for (size_t i = 0; i < frames.size(); ++i) {
       pre.process(track_frames[i].depth);
       const Eigen::Isometry3d& G = *frames[i].T_world_camera_gt;
       if (i >= 2) {
         const Eigen::Isometry3d& G1 = *frames[i - 1].T_world_camera_gt;
         const Eigen::Isometry3d& G2 = *frames[i - 2].T_world_camera_gt;
-        const Eigen::Isometry3d predicted = G1 * (G2.inverse() * G1);
+        const Eigen::Isometry3d predicted =
+            args.start_at_gt ? G : Eigen::Isometry3d(G1 * (G2.inverse() * G1));
         const emf::track::TrackResult r =
             tracker.track(emf::pipeline::deviceView(volume), pre.vertexMap().get(), nullptr,
                           T_wv.inverse() * predicted);
@@ -276,12 +301,7 @@ int main(int argc, char** argv) {
           }
         }
       }
-      if (!tracked_frames.empty()) pre.process(frames[i].depth);
-      emf::map::IntegrationInput in;
-      in.depth = &pre.inputDepth();
-      in.intrinsics = k;
-      in.T_world_camera = G;
-      volume.fuse(in);
+      if (!args.prefuse) fuse(i);
     }
     if (stats.n == 0) throw emf::IoError("track_bias: every frame was lost");
     std::printf("%s, %d frames%s (%d tracked, %d lost), %dx%d\n", args.data.c_str(),

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <sstream>
 #include <string>
 
 #include "cli/arg_parser.h"
@@ -41,10 +42,16 @@ std::string presetList() {
   return s;
 }
 
+std::string partList() {
+  std::string s;
+  for (const auto& n : io::synth::noisePartNames()) s += (s.empty() ? "" : ", ") + n;
+  return s;
+}
+
 }  // namespace
 
 int cmdSynth(const std::vector<std::string>& args) {
-  std::string preset, out, frames, seed, width, height, det_every, threads;
+  std::string preset, out, frames, seed, width, height, det_every, threads, noise_without;
   bool no_noise = false, force = false;
   ArgParser p("synth",
               "Renders a synthetic dynamic scene and writes it as a TUM RGB-D folder: rgb/, "
@@ -63,6 +70,9 @@ int cmdSynth(const std::vector<std::string>& args) {
            "30, 0 = never)");
   p.option("threads", &threads, "N", "rendering threads (default: all cores)");
   p.flag("no-noise", &no_noise, "exact depth and colour (no sensor noise)");
+  p.option("noise-without", &noise_without, "LIST",
+           "switch these parts of the depth noise model off (comma-separated: " + partList() +
+               "); the others stay on");
   p.flag("force", &force,
          "write into a non-empty folder (replaces rgb/, depth/, masks/, "
          "objects/ there)");
@@ -106,6 +116,24 @@ int cmdSynth(const std::vector<std::string>& args) {
     o.threads = static_cast<int>(v);
   }
   o.noise = !no_noise;
+  if (!noise_without.empty()) {
+    if (no_noise) {
+      std::fprintf(stderr,
+                   "emf synth: --noise-without and --no-noise exclude each other (--no-noise "
+                   "already switches every part off)\n");
+      return kExitUsage;
+    }
+    std::stringstream list(noise_without);
+    std::string part;
+    while (std::getline(list, part, ',')) {
+      if (!io::synth::disableNoisePart(part, &o.depth_noise)) {
+        std::fprintf(stderr,
+                     "emf synth: --noise-without %s: unknown part '%s': valid parts are %s\n",
+                     noise_without.c_str(), part.c_str(), partList().c_str());
+        return kExitUsage;
+      }
+    }
+  }
 
   std::error_code ec;
   if (fs::exists(out, ec) && !fs::is_directory(out, ec)) {
@@ -129,7 +157,8 @@ int cmdSynth(const std::vector<std::string>& args) {
                         " --seed " + std::to_string(o.seed) + " --width " +
                         std::to_string(o.width) + " --height " + std::to_string(o.height) +
                         " --det-every " + std::to_string(o.detector.every_n_frames) +
-                        (o.noise ? "" : " --no-noise");
+                        (o.noise ? "" : " --no-noise") +
+                        (noise_without.empty() ? "" : " --noise-without " + noise_without);
   io::TumWriterOptions wo;
   wo.readme_about =
       "Synthetic sequence `" + preset + "` made by emf " + std::to_string(EMF_VERSION_MAJOR) + "." +
@@ -144,6 +173,8 @@ int cmdSynth(const std::vector<std::string>& args) {
                  "projector shadows, range 0.4-4.5 m and 0.2 % random dropouts; colour has "
                  "uniform noise of 2 grey levels standard deviation."
                : "Depth and colour are exact (no sensor noise).") +
+      (noise_without.empty() ? ""
+                             : " Parts of the depth noise switched off: " + noise_without + ".") +
       (o.detector.every_n_frames > 0
            ? " The simulated detector ran every " + std::to_string(o.detector.every_n_frames) +
                  " frames (frames 0, " + std::to_string(o.detector.every_n_frames) +

@@ -149,6 +149,43 @@ TEST(SynthDepthNoise, DiscontinuitiesAndProjectorShadow) {
   EXPECT_EQ(noisy.at<float>(100, 200), 1.0f);
 }
 
+// Each part named by noisePartNames() switches off alone: on the block-before-wall scene above,
+// without every part the output is the exact depth; without the shadow the wall left of the
+// block is seen; without the edge effects the block's right edge is exact.
+TEST(SynthDepthNoise, PartsSwitchOffOneByOne) {
+  cv::Mat depth(200, 300, CV_32F, cv::Scalar(2.0f));
+  depth(cv::Rect(150, 0, 100, 200)).setTo(1.0f);
+  DepthNoiseOptions none;
+  for (const auto& part : noisePartNames()) ASSERT_TRUE(disableNoisePart(part, &none)) << part;
+  cv::Mat out;
+  DepthNoiseModel(none).apply(depth, cv::Mat(), 525.0, 5, 0, &out);
+  EXPECT_EQ(cv::countNonZero(out != depth), 0);  // NaN would differ too
+
+  DepthNoiseOptions no_shadow;  // geometry effects only, without the shadow
+  for (const char* part : {"axial", "quantization", "dropouts", "shadow"}) {
+    ASSERT_TRUE(disableNoisePart(part, &no_shadow));
+  }
+  DepthNoiseModel(no_shadow).apply(depth, cv::Mat(), 525.0, 5, 0, &out);
+  int edge_changed = 0;
+  for (int v = 0; v < depth.rows; ++v) {
+    EXPECT_EQ(out.at<float>(v, 140), 2.0f) << v;  // shadowed with the default options
+    edge_changed += out.at<float>(v, 249) != 1.0f;
+  }
+  EXPECT_GT(edge_changed, 0);  // edge effects still on
+
+  DepthNoiseOptions no_edges = no_shadow;
+  ASSERT_TRUE(disableNoisePart("edges", &no_edges));
+  DepthNoiseModel(no_edges).apply(depth, cv::Mat(), 525.0, 5, 0, &out);
+  for (int v = 0; v < depth.rows; ++v) {
+    EXPECT_EQ(out.at<float>(v, 249), 1.0f) << v;
+    EXPECT_EQ(out.at<float>(v, 250), 2.0f) << v;
+  }
+
+  DepthNoiseOptions unchanged;
+  EXPECT_FALSE(disableNoisePart("tilt", &unchanged));
+  EXPECT_TRUE(unchanged.axial_noise && unchanged.quantize && unchanged.projector_shadow);
+}
+
 TEST(SynthDepthNoise, DeterministicPerSeedAndFrame) {
   DepthNoiseModel model({});
   cv::Mat plane(60, 80, CV_32F, cv::Scalar(1.7f)), a, b, c, d;

@@ -58,6 +58,21 @@ TEST(CliSynth, WritesATumFolder) {
                              &log),
             0)
       << log;
+  ASSERT_EQ(test::runCommand(cli() + " synth room --out " + out +
+                                 " --frames 2 --width 32 --height 24 --force --noise-without "
+                                 "shadow,edges",
+                             &log),
+            0)
+      << log;
+  {
+    std::ifstream again(out + "/README.md");
+    const std::string about((std::istreambuf_iterator<char>(again)),
+                            std::istreambuf_iterator<char>());
+    EXPECT_NE(about.find("--det-every 30 --noise-without shadow,edges"), std::string::npos)
+        << about;
+    EXPECT_NE(about.find("Parts of the depth noise switched off: shadow,edges."), std::string::npos)
+        << about;
+  }
   EXPECT_EQ(countLines(out + "/rgb.txt"), 2);
   EXPECT_FALSE(fs::exists(out + "/objects/gt-object-1-world.txt"));  // room has no objects
   EXPECT_FALSE(fs::exists(out + "/depth/0.100000.png"));             // old frames are gone
@@ -79,6 +94,18 @@ TEST(CliSynth, UsageErrors) {
   EXPECT_NE(log.find("--width 4: expected an integer in [8, 8192]"), std::string::npos) << log;
   EXPECT_EQ(test::runCommand(cli() + " synth room --out " + out + " --colour", &log), 2);
   EXPECT_NE(log.find("unknown option --colour"), std::string::npos) << log;
+  EXPECT_EQ(
+      test::runCommand(cli() + " synth room --out " + out + " --noise-without axial,tilt", &log),
+      2);
+  EXPECT_NE(log.find("--noise-without axial,tilt: unknown part 'tilt': valid parts are axial, "
+                     "quantization, edges, shadow, grazing, dropouts"),
+            std::string::npos)
+      << log;
+  EXPECT_EQ(test::runCommand(
+                cli() + " synth room --out " + out + " --noise-without axial --no-noise", &log),
+            2);
+  EXPECT_NE(log.find("--noise-without and --no-noise exclude each other"), std::string::npos)
+      << log;
   EXPECT_EQ(test::runCommand(cli() + " synth --help", &log), 0);
   EXPECT_NE(log.find("usage: emf synth"), std::string::npos) << log;
   EXPECT_FALSE(fs::exists(out));

@@ -48,6 +48,32 @@ bool isEdge(const cv::Mat& depth, int u, int v, double z, double rel) {
 
 }  // namespace
 
+const std::vector<std::string>& noisePartNames() {
+  static const std::vector<std::string> names = {"axial",  "quantization", "edges",
+                                                 "shadow", "grazing",      "dropouts"};
+  return names;
+}
+
+bool disableNoisePart(const std::string& name, DepthNoiseOptions* options) {
+  if (name == "axial") {
+    options->axial_noise = false;
+  } else if (name == "quantization") {
+    options->quantize = false;
+  } else if (name == "edges") {
+    options->edge_dropout_prob = 0.0;
+    options->edge_jitter_prob = 0.0;
+  } else if (name == "shadow") {
+    options->projector_shadow = false;
+  } else if (name == "grazing") {
+    options->max_incidence_deg = 90.0;
+  } else if (name == "dropouts") {
+    options->dropout_prob = 0.0;
+  } else {
+    return false;
+  }
+  return true;
+}
+
 double DepthNoiseModel::axialSigma(double z, double theta) const {
   return sigmaOf(options_, z, theta);
 }

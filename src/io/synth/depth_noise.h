@@ -13,6 +13,8 @@
 
 #include <cstdint>
 #include <opencv2/core.hpp>
+#include <string>
+#include <vector>
 
 namespace emf::io::synth {
 
@@ -39,6 +41,13 @@ struct DepthNoiseOptions {
   double max_incidence_deg = 84.0;  // more grazing surfaces return nothing
   double dropout_prob = 0.002;      // random invalid pixels
 };
+
+/// Names of the model's parts that disableNoisePart() switches off, in the order listed above:
+/// axial, quantization, edges (dropout and jitter at discontinuities), shadow, grazing, dropouts.
+const std::vector<std::string>& noisePartNames();
+/// Switches one part of the model off (e.g. to find which part of the sensor a tracker is
+/// sensitive to). Returns false for a name not in noisePartNames().
+bool disableNoisePart(const std::string& name, DepthNoiseOptions* options);
 
 class DepthNoiseModel {
  public:
