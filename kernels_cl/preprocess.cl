@@ -5,8 +5,12 @@
 //
 // Depth is float metres, NaN (or 0) = invalid. A pixel is valid when its depth lies in
 // [min_depth, max_depth] (and > 0). Invalid pixels stay invalid and do not contribute to their
-// neighbours. Output: filtered depth (NaN = invalid) and vertex (x, y, z, 1) in metres in the
-// camera frame (x right, y down, z forward), (NaN, NaN, NaN, 0) when invalid.
+// neighbours. A valid pixel whose filtered depth exceeds guard_max_depth (the range guard,
+// PreprocessOptions::range_guard_per_m2; INFINITY = off) and whose window holds a pixel without
+// usable depth (the image border does not count) becomes invalid. Output: filtered depth
+// (NaN = invalid) and vertex (x, y, z, 1) in metres in the camera frame (x right, y down, z
+// forward), (NaN, NaN, NaN, 0) when invalid; with write_guarded, `guarded` receives the input
+// depth with NaN where the guard dropped a pixel: what the map integrates.
 #include "common.clh"
 
 // Hole margin (PreprocessOptions::hole_margin_px): a pixel keeps its depth only when no pixel
@@ -92,7 +96,8 @@ __kernel void preprocess_depth(__global const float* depth_in, __global float* d
                                const float inv_two_sigma_space_sq, const float sigma_depth,
                                const float sigma_depth_per_m2, const float min_depth,
                                const float max_depth, const float fx, const float fy,
-                               const float cx, const float cy) {
+                               const float cx, const float cy, const float guard_max_depth,
+                               __global float* guarded, const int write_guarded) {
   const int u0 = get_global_id(0) * 16;
   const int v = get_global_id(1);
   if (u0 >= width || v >= height) return;
@@ -107,6 +112,7 @@ __kernel void preprocess_depth(__global const float* depth_in, __global float* d
   const float16 inv_two_sigma_r_sq = 0.5f / (sigma_r * sigma_r);
   float16 sum_w = 0.0f;
   float16 sum_wd = 0.0f;
+  int16 hole = 0;  // a pixel of the window (inside the image) without usable depth
   for (int dv = -PRE_RADIUS; dv <= PRE_RADIUS; ++dv) {
     const int vv = v + dv;
     if (vv < 0 || vv >= height) continue;
@@ -114,6 +120,8 @@ __kernel void preprocess_depth(__global const float* depth_in, __global float* d
     for (int du = -PRE_RADIUS; du <= PRE_RADIUS; ++du) {
       const float16 d = emf_load16(row, u0 + du, width);
       const int16 use = (d > above) & (d <= max_depth);
+      const int16 col = u0 + du + lane;
+      hole |= (col >= 0) & (col < width) & !use;
       const float16 dd = d - d0;
       const float16 w = emf_exp_neg16(-(float)(du * du + dv * dv) * inv_two_sigma_space_sq -
                                       dd * dd * inv_two_sigma_r_sq);
@@ -121,15 +129,23 @@ __kernel void preprocess_depth(__global const float* depth_in, __global float* d
       sum_wd += use ? w * d : 0.0f;
     }
   }
-  // The centre always contributes weight 1 when valid, so sum_w >= 1 there.
-  const float16 z = centre_valid ? sum_wd / sum_w : NAN;
+  // The centre always contributes weight 1 when valid, so sum_w >= 1 there. The range guard
+  // drops pixels whose filtered depth is beyond guard_max_depth (INFINITY: off) and that have a
+  // hole in their window (a surface cut by a range limit is riddled with them).
+  const float16 filtered = sum_wd / sum_w;
+  const int16 guard_drop = centre_valid & hole & !(filtered <= guard_max_depth);
+  const float16 z = (centre_valid & !guard_drop) ? filtered : NAN;
   const float16 x = (convert_float16(u0 + lane) - cx) / fx * z;
   const float y = ((float)v - cy) / fy;
   const int i0 = v * width + u0;
   if (u0 + 15 < width) vstore16(z, 0, depth_out + i0);
+  // The depth the map integrates: the input, without the pixels the guard dropped.
+  const float16 kept = guard_drop ? NAN : d0;
+  if (write_guarded && u0 + 15 < width) vstore16(kept, 0, guarded + i0);
 #define EMF_PRE_STORE(l)                                                             \
   if (u0 + 0x##l < width) {                                                          \
     if (u0 + 15 >= width) depth_out[i0 + 0x##l] = z.s##l;                            \
+    if (write_guarded && u0 + 15 >= width) guarded[i0 + 0x##l] = kept.s##l;          \
     vertex[i0 + 0x##l] = isnan(z.s##l) ? (float4)(NAN, NAN, NAN, 0.0f)               \
                                        : (float4)(x.s##l, y * z.s##l, z.s##l, 1.0f); \
   }

@@ -1,5 +1,6 @@
 #include "track/preprocess.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -45,6 +46,30 @@ void validatePreprocessOptions(const PreprocessOptions& o) {
   }
 }
 
+float maxDepthInRange(const cv::Mat& depth_m, const PreprocessOptions& o) {
+  CV_Assert(depth_m.type() == CV_32F);
+  // depthInRange as two comparisons (both false for NaN), so that the loop vectorises:
+  // d > 0 && d >= min  <=>  d >= max(min, the smallest positive float).
+  const float lo =
+      std::max(static_cast<float>(o.min_depth_m), std::numeric_limits<float>::denorm_min());
+  const float hi = static_cast<float>(o.max_depth_m);
+  float m = 0.0f;
+  for (int v = 0; v < depth_m.rows; ++v) {
+    const float* row = depth_m.ptr<float>(v);
+    for (int u = 0; u < depth_m.cols; ++u) {
+      const float d = row[u];
+      m = (d >= lo && d <= hi && d > m) ? d : m;
+    }
+  }
+  return m;
+}
+
+float rangeGuardMaxDepth(const PreprocessOptions& o, float frame_max_m) {
+  if (!(o.range_guard_per_m2 > 0.0)) return std::numeric_limits<float>::infinity();
+  const double limit = std::min(o.max_depth_m, static_cast<double>(frame_max_m));
+  return static_cast<float>(limit - o.range_guard_per_m2 * limit * limit);
+}
+
 cv::Mat dropHoleMarginReference(const cv::Mat& depth_m, int radius) {
   CV_Assert(depth_m.type() == CV_32F);
   cv::Mat out = depth_m.clone();
@@ -69,6 +94,7 @@ PreprocessedFrame preprocessReference(const cv::Mat& input_m, const io::Intrinsi
   checkDepth(input_m, k);
   validatePreprocessOptions(o);
   const cv::Mat depth_m = dropHoleMarginReference(input_m, o.hole_margin_px);
+  const float guard_max = rangeGuardMaxDepth(o, maxDepthInRange(input_m, o));
   const int w = k.width, h = k.height, r = o.bilateral_radius_px;
   const float min_d = static_cast<float>(o.min_depth_m);
   const float max_d = static_cast<float>(o.max_depth_m);
@@ -80,6 +106,7 @@ PreprocessedFrame preprocessReference(const cv::Mat& input_m, const io::Intrinsi
   PreprocessedFrame out;
   out.depth_m.create(h, w, CV_32F);
   out.vertex.create(h, w, CV_32FC4);
+  out.input_m = depth_m.clone();
   for (int v = 0; v < h; ++v) {
     for (int u = 0; u < w; ++u) {
       const float d0 = depth_m.at<float>(v, u);
@@ -91,6 +118,7 @@ PreprocessedFrame preprocessReference(const cv::Mat& input_m, const io::Intrinsi
       const float sigma_r = sigma_d + sigma_d_per_m2 * (d0 * d0);  // as the kernel
       const float inv_d = 0.5f / (sigma_r * sigma_r);
       float sum_w = 0.0f, sum_wd = 0.0f;
+      bool hole = false;
       for (int dv = -r; dv <= r; ++dv) {
         const int vv = v + dv;
         if (vv < 0 || vv >= h) continue;
@@ -98,7 +126,10 @@ PreprocessedFrame preprocessReference(const cv::Mat& input_m, const io::Intrinsi
           const int uu = u + du;
           if (uu < 0 || uu >= w) continue;
           const float d = depth_m.at<float>(vv, uu);
-          if (!depthInRange(d, min_d, max_d)) continue;
+          if (!depthInRange(d, min_d, max_d)) {
+            hole = true;
+            continue;
+          }
           const float dd = d - d0;
           const float wt =
               std::exp(-static_cast<float>(du * du + dv * dv) * inv_s - dd * dd * inv_d);
@@ -107,6 +138,12 @@ PreprocessedFrame preprocessReference(const cv::Mat& input_m, const io::Intrinsi
         }
       }
       const float z = sum_wd / sum_w;
+      if (hole && !(z <= guard_max)) {  // the range guard
+        out.depth_m.at<float>(v, u) = kNaN;
+        out.vertex.at<cv::Vec4f>(v, u) = cv::Vec4f(kNaN, kNaN, kNaN, 0.0f);
+        out.input_m.at<float>(v, u) = kNaN;
+        continue;
+      }
       out.depth_m.at<float>(v, u) = z;
       out.vertex.at<cv::Vec4f>(v, u) = cv::Vec4f((static_cast<float>(u) - cx) / fx * z,
                                                  (static_cast<float>(v) - cy) / fy * z, z, 1.0f);
@@ -128,6 +165,7 @@ Preprocessor::Preprocessor(cl::Context& ctx, const PreprocessOptions& options,
                                  "-DPRE_RADIUS=" + std::to_string(options_.bilateral_radius_px));
     margin_ = ctx_.buffer(CL_MEM_READ_WRITE, n * sizeof(float));
   }
+  if (options_.range_guard_per_m2 > 0) guarded_ = ctx_.buffer(CL_MEM_READ_WRITE, n * sizeof(float));
   input_ = ctx_.buffer(CL_MEM_READ_ONLY, n * sizeof(float));
   filtered_ = ctx_.buffer(CL_MEM_READ_WRITE, n * sizeof(float));
   vertex_ = ctx_.buffer(CL_MEM_READ_WRITE, n * 4 * sizeof(float));
@@ -142,10 +180,11 @@ void Preprocessor::process(const cv::Mat& depth_m) {
     const cv::Mat copy = depth_m.clone();
     ctx_.write(input_, copy.ptr<float>(0), row_bytes * intrinsics_.height);
   }
-  process(input_.get());
+  process(input_.get(), options_.range_guard_per_m2 > 0 ? maxDepthInRange(depth_m, options_)
+                                                        : std::numeric_limits<float>::infinity());
 }
 
-void Preprocessor::process(cl_mem input_m) {
+void Preprocessor::process(cl_mem input_m, float frame_max_m) {
   const auto& o = options_;
   cl_mem depth_m = input_m;
   if (o.hole_margin_px > 0) {
@@ -161,7 +200,9 @@ void Preprocessor::process(cl_mem input_m) {
               static_cast<float>(o.sigma_depth_per_m2), static_cast<float>(o.min_depth_m),
               static_cast<float>(o.max_depth_m), static_cast<float>(intrinsics_.fx),
               static_cast<float>(intrinsics_.fy), static_cast<float>(intrinsics_.cx),
-              static_cast<float>(intrinsics_.cy));
+              static_cast<float>(intrinsics_.cy), rangeGuardMaxDepth(o, frame_max_m),
+              o.range_guard_per_m2 > 0 ? guarded_.get() : filtered_.get(),
+              o.range_guard_per_m2 > 0 ? 1 : 0);
   // Sixteen pixels per work item along x.
   cl::enqueue(ctx_.queue(), kernel_, static_cast<size_t>((intrinsics_.width + 15) / 16),
               static_cast<size_t>(intrinsics_.height), 0, 8, 8);
@@ -174,6 +215,8 @@ PreprocessedFrame Preprocessor::download() const {
   const size_t n = static_cast<size_t>(intrinsics_.width) * intrinsics_.height;
   ctx_.read(filtered_, out.depth_m.ptr<float>(0), n * sizeof(float));
   ctx_.read(vertex_, out.vertex.ptr<float>(0), n * 4 * sizeof(float));
+  out.input_m.create(intrinsics_.height, intrinsics_.width, CV_32F);
+  ctx_.read(inputDepth(), out.input_m.ptr<float>(0), n * sizeof(float));
   return out;
 }
 

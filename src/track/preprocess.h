@@ -3,6 +3,7 @@
 // reference.
 #pragma once
 
+#include <limits>
 #include <opencv2/core.hpp>
 
 #include "cl/context.h"
@@ -15,13 +16,23 @@ namespace emf::track {
 struct PreprocessedFrame {
   cv::Mat depth_m;  // CV_32F filtered depth, metres, NaN = invalid
   cv::Mat vertex;   // CV_32FC4 camera-frame points (x, y, z, 1) in metres; (NaN x3, 0) invalid
+  cv::Mat input_m;  // CV_32F the depth the map integrates (hole margin and range guard applied)
 };
+
+/// The largest depth of `depth_m` (CV_32F metres) within [min_depth_m, max_depth_m]; 0 when
+/// there is none.
+float maxDepthInRange(const cv::Mat& depth_m, const PreprocessOptions& options);
+/// The range guard's limit on the filtered depth (PreprocessOptions::range_guard_per_m2): with
+/// L = min(max_depth_m, frame_max_m), L - range_guard_per_m2 * L^2; INFINITY when the guard is
+/// off.
+float rangeGuardMaxDepth(const PreprocessOptions& options, float frame_max_m);
 
 /// CPU reference of the drop_hole_margin kernel: `depth_m` (CV_32F) with every pixel within
 /// `radius` (Chebyshev) of a pixel without depth (NaN or <= 0) set to NaN.
 cv::Mat dropHoleMarginReference(const cv::Mat& depth_m, int radius);
 
-/// CPU reference of the preprocessing (hole margin, then the preprocess_depth kernel).
+/// CPU reference of the preprocessing (hole margin, then the preprocess_depth kernel with the
+/// range guard from the largest depth of `depth_m`).
 /// `depth_m`: CV_32F metres, NaN or 0 = invalid.
 PreprocessedFrame preprocessReference(const cv::Mat& depth_m, const io::Intrinsics& intrinsics,
                                       const PreprocessOptions& options);
@@ -39,19 +50,23 @@ class Preprocessor {
                const io::Intrinsics& intrinsics);
 
   /// Copies `depth_m` (CV_32F metres, intrinsics' size) into the input buffer and runs the
-  /// kernel. Throws InvalidArgument naming the expected size/type on mismatch.
+  /// kernel (the range guard's frame limit from the largest depth of `depth_m`). Throws
+  /// InvalidArgument naming the expected size/type on mismatch.
   void process(const cv::Mat& depth_m);
   /// Runs the hole margin and the filter on a device buffer of width * height floats (metres)
-  /// already filled (read, not modified).
-  void process(cl_mem depth_m);
+  /// already filled (read, not modified). `frame_max_m`: the largest valid depth in it, for
+  /// the range guard (INFINITY: unknown, the guard uses max_depth_m).
+  void process(cl_mem depth_m, float frame_max_m = std::numeric_limits<float>::infinity());
 
   /// float4 per pixel (camera frame, metres; w = 0 invalid), width * height, row-major.
   const cl::MemHandle& vertexMap() const { return vertex_; }
   /// float per pixel, filtered depth in metres (NaN invalid).
   const cl::MemHandle& filteredDepth() const { return filtered_; }
-  /// The depth the filter read: the input with the hole margin dropped (NaN), metres. What the
-  /// map integrates. With hole_margin_px 0 it is the input buffer of process(const cv::Mat&).
-  const cl::MemHandle& inputDepth() const { return options_.hole_margin_px > 0 ? margin_ : input_; }
+  /// What the map integrates: the input with the hole margin and the pixels the range guard
+  /// dropped set to NaN, metres. With neither it is the input buffer of process(const cv::Mat&).
+  const cl::MemHandle& inputDepth() const {
+    return options_.range_guard_per_m2 > 0 ? guarded_ : filterInput();
+  }
 
   /// Blocking read-back of the results (tests, debugging, exporters).
   PreprocessedFrame download() const;
@@ -65,7 +80,13 @@ class Preprocessor {
   cl::KernelHandle kernel_;
   cl::KernelHandle margin_kernel_;
   cl::MemHandle input_;
-  cl::MemHandle margin_;  // the input without its hole margin (hole_margin_px > 0)
+  /// The depth the filter reads: the input, or without its hole margin.
+  const cl::MemHandle& filterInput() const {
+    return options_.hole_margin_px > 0 ? margin_ : input_;
+  }
+
+  cl::MemHandle margin_;   // the input without its hole margin (hole_margin_px > 0)
+  cl::MemHandle guarded_;  // the filter's input without the guard's pixels (range guard on)
   cl::MemHandle filtered_;
   cl::MemHandle vertex_;
 };

@@ -150,8 +150,9 @@ TEST(SynthDepthNoise, DiscontinuitiesAndProjectorShadow) {
 }
 
 // Each part named by noisePartNames() switches off alone: on the block-before-wall scene above,
-// without every part the output is the exact depth; without the shadow the wall left of the
-// block is seen; without the edge effects the block's right edge is exact.
+// without every part the output is the exact depth (a wall at 6 m too, beyond the range); without
+// the shadow the wall left of the block is seen; without the edge effects the block's right edge is
+// exact.
 TEST(SynthDepthNoise, PartsSwitchOffOneByOne) {
   cv::Mat depth(200, 300, CV_32F, cv::Scalar(2.0f));
   depth(cv::Rect(150, 0, 100, 200)).setTo(1.0f);
@@ -160,6 +161,14 @@ TEST(SynthDepthNoise, PartsSwitchOffOneByOne) {
   cv::Mat out;
   DepthNoiseModel(none).apply(depth, cv::Mat(), 525.0, 5, 0, &out);
   EXPECT_EQ(cv::countNonZero(out != depth), 0);  // NaN would differ too
+  // Without "range" nothing is cut beyond max_range_m (4.5 m).
+  const cv::Mat far(20, 30, CV_32F, cv::Scalar(6.0f));
+  DepthNoiseModel(none).apply(far, cv::Mat(), 525.0, 5, 0, &out);
+  EXPECT_EQ(cv::countNonZero(out != far), 0);
+  DepthNoiseOptions ranged = none;
+  ranged.max_range_m = DepthNoiseOptions().max_range_m;
+  DepthNoiseModel(ranged).apply(far, cv::Mat(), 525.0, 5, 0, &out);
+  EXPECT_EQ(cv::countNonZero(out == out), 0);
 
   DepthNoiseOptions no_shadow;  // geometry effects only, without the shadow
   for (const char* part : {"axial", "quantization", "dropouts", "shadow"}) {

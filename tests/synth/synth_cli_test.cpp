@@ -98,7 +98,7 @@ TEST(CliSynth, UsageErrors) {
       test::runCommand(cli() + " synth room --out " + out + " --noise-without axial,tilt", &log),
       2);
   EXPECT_NE(log.find("--noise-without axial,tilt: unknown part 'tilt': valid parts are axial, "
-                     "quantization, edges, shadow, grazing, dropouts"),
+                     "quantization, edges, shadow, grazing, dropouts, range"),
             std::string::npos)
       << log;
   EXPECT_EQ(test::runCommand(

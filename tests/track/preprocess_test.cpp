@@ -45,6 +45,16 @@ int compareWithReference(cl::Context& ctx, const cv::Mat& depth, const io::Intri
       if (std::abs(d - r) > kPreprocessToleranceM) return valid;  // one report is enough
     }
   }
+  // What the map integrates: the input with the same pixels dropped, bit for bit.
+  for (int v = 0; v < k.height; ++v) {
+    for (int u = 0; u < k.width; ++u) {
+      const float r = ref.input_m.at<float>(v, u), d = dev.input_m.at<float>(v, u);
+      if (std::isnan(r) ? !std::isnan(d) : !(d == r)) {
+        ADD_FAILURE() << "integrated depth at (" << u << "," << v << "): " << d << " vs " << r;
+        return valid;
+      }
+    }
+  }
   return valid;
 }
 
@@ -54,6 +64,7 @@ TEST_F(Preprocess, RealKinectDepthMatchesReference) {
   const cv::Mat depth =
       test::readDepthPng(test::dataPath("tum-fr1-xyz-pairs/case_1/dep_prev.png"), 5000.0);
   PreprocessOptions o;  // defaults: range sigma 0.04 m + 0.01 z^2, 4.5 px, 7x7
+  o.range_guard_per_m2 = 0.0;  // counted below, on its own
   o.hole_margin_px = 1;
   const int valid = compareWithReference(ctx(), depth, test::kinectCamera(), o);
   // The frame has holes (zeros) that must stay invalid, and so must the pixels next to them;
@@ -65,6 +76,11 @@ TEST_F(Preprocess, RealKinectDepthMatchesReference) {
   EXPECT_GT(valid, 640 * 480 / 2);
   o.hole_margin_px = 0;
   EXPECT_EQ(compareWithReference(ctx(), depth, test::kinectCamera(), o), raw_valid);
+  // The range guard on real depth: the same pixels dropped as by the reference, a few.
+  o.range_guard_per_m2 = 0.05;
+  const int guarded = compareWithReference(ctx(), depth, test::kinectCamera(), o);
+  EXPECT_LT(guarded, raw_valid);
+  EXPECT_GT(guarded, raw_valid / 2);
 }
 
 TEST_F(Preprocess, RealDepthWithRangeLimitsMatchesReference) {
@@ -74,6 +90,7 @@ TEST_F(Preprocess, RealDepthWithRangeLimitsMatchesReference) {
   o.min_depth_m = 1.0;
   o.max_depth_m = 2.0;
   o.hole_margin_px = 1;
+  o.range_guard_per_m2 = 0.0;  // it would drop the pixels near 2 m next to a hole
   const int valid = compareWithReference(ctx(), depth, test::kinectCamera(), o);
   // Depth out of range is no hole: only the pixels next to missing depth lose theirs.
   const cv::Mat kept = dropHoleMarginReference(depth, o.hole_margin_px);
@@ -151,6 +168,15 @@ TEST_F(Preprocess, ConstructedEdgesAndHolesMatchReference) {
     o.hole_margin_px = margin;
     compareWithReference(ctx(), depth, k, o);
   }
+  // The range guard: 0.005 drops the far end of the 4.999-5 m strip (limit 5 - 0.125 m), 0.1
+  // everything beyond 2.5 m: the far half of the step edge too (default filter settings).
+  o = PreprocessOptions();
+  for (const double guard : {0.005, 0.1}) {
+    o.range_guard_per_m2 = guard;
+    const int valid = compareWithReference(ctx(), depth, k, o);
+    o.range_guard_per_m2 = 0.0;
+    EXPECT_LT(valid, compareWithReference(ctx(), depth, k, o)) << guard;
+  }
 }
 
 // The hole margin of the reference on a constructed image: the pixels within the margin of a
@@ -186,6 +212,77 @@ TEST(PreprocessReference, HoleMarginDropsThePixelsNextToMissingDepthOnly) {
             2.0f);
 }
 
+// The range guard on a constructed frame: a wall at 2 m (columns 0-19) and one at 4.46 m
+// (columns 20-59), one pixel at 4.5 m (the frame's largest depth: a sensor's range). Columns
+// 20-39 of the far wall have a hole every 4 px in both directions (as a surface cut by a range
+// limit), columns 40-59 none. With 0.005 the limit on the filtered depth is
+// 4.5 - 0.005 x 4.5^2 = 4.39875 m: a far pixel goes, from the tracked and the integrated depth,
+// when its 7x7 window holds a hole; the near wall and the far pixels without a hole near stay.
+// Below max_depth_m the frame's largest in-range depth sets the limit; 0 is off.
+TEST(PreprocessReference, RangeGuardDropsTheDepthNearTheFrameLimitNextToHoles) {
+  constexpr float kLimitToleranceM = 1e-6f;
+  const int w = 60, h = 30, r = PreprocessOptions().bilateral_radius_px;
+  io::Intrinsics k;
+  k.fx = k.fy = 40;
+  k.cx = 29.5;
+  k.cy = 14.5;
+  k.width = w;
+  k.height = h;
+  cv::Mat depth(h, w, CV_32F, cv::Scalar(2.0f));
+  depth(cv::Rect(20, 0, 40, h)).setTo(4.46f);
+  for (int v = 1; v < h; v += 4) {
+    for (int u = 21; u < 40; u += 4) depth.at<float>(v, u) = kNaN;
+  }
+  depth.at<float>(15, 50) = 4.5f;
+  const auto holeInWindow = [&](int u, int v) {
+    for (int vv = std::max(0, v - r); vv <= std::min(h - 1, v + r); ++vv) {
+      for (int uu = std::max(0, u - r); uu <= std::min(w - 1, u + r); ++uu) {
+        if (std::isnan(depth.at<float>(vv, uu))) return true;
+      }
+    }
+    return false;
+  };
+  PreprocessOptions o;
+  o.range_guard_per_m2 = 0.0;
+  EXPECT_EQ(maxDepthInRange(depth, o), 4.5f);
+  EXPECT_TRUE(std::isinf(rangeGuardMaxDepth(o, 4.5f)));
+  const int valid_input = cv::countNonZero(depth == depth);
+  PreprocessedFrame out = preprocessReference(depth, k, o);
+  EXPECT_EQ(cv::countNonZero(out.depth_m == out.depth_m), valid_input);
+
+  o.range_guard_per_m2 = 0.005;
+  EXPECT_NEAR(rangeGuardMaxDepth(o, 4.5f), 4.39875f, kLimitToleranceM);
+  out = preprocessReference(depth, k, o);
+  int dropped = 0;
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      const float d = depth.at<float>(v, u);
+      if (std::isnan(d)) continue;
+      const bool drop = u >= 20 && holeInWindow(u, v);
+      dropped += drop ? 1 : 0;
+      EXPECT_EQ(std::isnan(out.depth_m.at<float>(v, u)), drop) << u << "," << v;
+      EXPECT_EQ(out.vertex.at<cv::Vec4f>(v, u)[3], drop ? 0.0f : 1.0f);
+      if (drop) {
+        EXPECT_TRUE(std::isnan(out.input_m.at<float>(v, u)));
+      } else {
+        EXPECT_EQ(out.input_m.at<float>(v, u), d);
+      }
+    }
+  }
+  // Columns 20-39 (600 pixels, 40 of them holes) and column 40, 3 px from the holes of column 37.
+  EXPECT_EQ(dropped, 560 + 30);
+  // max_depth_m 4.48: the 4.5 m pixel is out of range, the 4.46 m wall sets the limit
+  // (4.46 - 0.005 x 4.46^2 = 4.360542 m), and the out-of-range pixel is a hole for its window.
+  o.max_depth_m = 4.48;
+  EXPECT_EQ(maxDepthInRange(depth, o), 4.46f);
+  EXPECT_NEAR(rangeGuardMaxDepth(o, 4.46f), 4.360542f, kLimitToleranceM);
+  out = preprocessReference(depth, k, o);
+  EXPECT_EQ(cv::countNonZero(out.depth_m == out.depth_m), valid_input - 1 - dropped - 48);
+  // max_depth_m below the frame's largest depth caps the limit: 4 - 0.005 x 16 = 3.92 m.
+  o.max_depth_m = 4.0;
+  EXPECT_NEAR(rangeGuardMaxDepth(o, 4.5f), 3.92f, kLimitToleranceM);
+}
+
 TEST(PreprocessReference, SemanticsOnConstructedDepth) {
   const int w = 67, h = 45;
   io::Intrinsics k;
@@ -197,6 +294,7 @@ TEST(PreprocessReference, SemanticsOnConstructedDepth) {
   k.height = h;
   const cv::Mat depth = constructedDepth(w, h);
   PreprocessOptions o;
+  o.range_guard_per_m2 = 0.0;  // the range limits below are tested without it
   const PreprocessedFrame out = preprocessReference(depth, k, o);
   // Invalid inputs stay invalid.
   EXPECT_TRUE(std::isnan(out.depth_m.at<float>(12, 12)));

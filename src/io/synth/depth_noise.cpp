@@ -49,8 +49,8 @@ bool isEdge(const cv::Mat& depth, int u, int v, double z, double rel) {
 }  // namespace
 
 const std::vector<std::string>& noisePartNames() {
-  static const std::vector<std::string> names = {"axial",  "quantization", "edges",
-                                                 "shadow", "grazing",      "dropouts"};
+  static const std::vector<std::string> names = {"axial",   "quantization", "edges", "shadow",
+                                                 "grazing", "dropouts",     "range"};
   return names;
 }
 
@@ -68,6 +68,9 @@ bool disableNoisePart(const std::string& name, DepthNoiseOptions* options) {
     options->max_incidence_deg = 90.0;
   } else if (name == "dropouts") {
     options->dropout_prob = 0.0;
+  } else if (name == "range") {
+    options->min_range_m = 0.0;
+    options->max_range_m = std::numeric_limits<double>::infinity();
   } else {
     return false;
   }

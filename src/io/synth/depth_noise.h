@@ -43,7 +43,8 @@ struct DepthNoiseOptions {
 };
 
 /// Names of the model's parts that disableNoisePart() switches off, in the order listed above:
-/// axial, quantization, edges (dropout and jitter at discontinuities), shadow, grazing, dropouts.
+/// axial, quantization, edges (dropout and jitter at discontinuities), shadow, grazing, dropouts,
+/// range (the range limits).
 const std::vector<std::string>& noisePartNames();
 /// Switches one part of the model off (e.g. to find which part of the sensor a tracker is
 /// sensitive to). Returns false for a name not in noisePartNames().
