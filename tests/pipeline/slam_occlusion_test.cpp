@@ -64,13 +64,14 @@ struct BoxRun {
   int covered_frames_seen = 0;  // frames on which the panel covers >= 95 % of the box's pixels
 };
 
-BoxRun runScene(double hidden_fraction) {
+BoxRun runScene(double hidden_fraction, uint64_t seed = 1) {
   Config config = test_scene::smallSceneConfig();
   config.objects.hidden_fraction = hidden_fraction;
   cl::Context ctx(config.cl);
   io::synth::SynthOptions so;
   so.width = kWidth;
   so.height = kHeight;
+  so.seed = seed;
   io::synth::SynthSource src(so, coveredBoxScene());
   SlamSystem slam(ctx, config, src.intrinsics());
   BoxRun run;
@@ -107,10 +108,9 @@ BoxRun runScene(double hidden_fraction) {
   return run;
 }
 
-TEST(SlamOcclusion, ACoveredObjectIsHeldAndTrackedAgainWhereItWas) {
-  const BoxRun run = runScene(Config{}.objects.hidden_fraction);
+void expectHeldAndTrackedAgain(const BoxRun& run, int max_lost_frames) {
   ASSERT_EQ(run.states.size(), static_cast<size_t>(kFrames));
-  EXPECT_EQ(run.lost_frames, 0);
+  EXPECT_LE(run.lost_frames, max_lost_frames);
   // The scene does what it should: the panel hides the box on the covered frames.
   EXPECT_EQ(run.covered_frames_seen, kCoveredLast - kCoveredFirst + 1);
   EXPECT_EQ(run.deleted_frame, -1) << run.deleted_reason;
@@ -136,6 +136,22 @@ TEST(SlamOcclusion, ACoveredObjectIsHeldAndTrackedAgainWhereItWas) {
     EXPECT_LT((run.T_world_box[static_cast<size_t>(i)].translation() - before.translation()).norm(),
               kPoseDriftToleranceM);
   }
+}
+
+TEST(SlamOcclusion, ACoveredObjectIsHeldAndTrackedAgainWhereItWas) {
+  expectHeldAndTrackedAgain(runScene(Config{}.objects.hidden_fraction), 0);
+}
+
+// Sensor noise seed 2, the hardest of seeds 1-6 for the camera: as the undetected panel leaves
+// (frames ~56-62) the camera is pulled up to 6.5 cm and loses 4 frames, which are reported (0
+// and 3.1 cm without the range guard, preprocess.range_guard_per_m2; with a guard of 0.003-0.005
+// the panel drags it 0.81 m and the box is not found again). The box must still be held while
+// covered and tracked again where it was. The bound leaves room for other builds' rounding
+// (sanitizers): a loss right at the rules' thresholds may take a frame more or fewer.
+constexpr int kSeed2MaxLostFrames = 8;
+
+TEST(SlamOcclusion, ACoveredObjectIsHeldAndTrackedAgainOnAnotherNoiseSeed) {
+  expectHeldAndTrackedAgain(runScene(Config{}.objects.hidden_fraction, 2), kSeed2MaxLostFrames);
 }
 
 TEST(SlamOcclusion, WithoutTheHiddenRuleTheCoveredObjectIsDeleted) {
