@@ -63,7 +63,7 @@ class Preprocess : public test::WithClQueue {};
 TEST_F(Preprocess, RealKinectDepthMatchesReference) {
   const cv::Mat depth =
       test::readDepthPng(test::dataPath("tum-fr1-xyz-pairs/case_1/dep_prev.png"), 5000.0);
-  PreprocessOptions o;  // defaults: range sigma 0.04 m + 0.01 z^2, 4.5 px, 7x7
+  PreprocessOptions o;         // defaults: range sigma 0.04 m + 0.01 z^2, 4.5 px, 7x7
   o.range_guard_per_m2 = 0.0;  // counted below, on its own
   o.hole_margin_px = 1;
   const int valid = compareWithReference(ctx(), depth, test::kinectCamera(), o);
