@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "common/error.h"
 #include "common/log.h"
@@ -177,14 +178,18 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
   deleted_now_.clear();
   {
     ScopedStage s(timer_, "preprocess");
-    preprocessor_.process(frame.depth);  // also keeps the raw depth on the device
+    // The range guard's frame limit, once for both preprocessors (same depth range).
+    const float frame_max_m = config_.preprocess.range_guard_per_m2 > 0
+                                  ? track::maxDepthInRange(frame.depth, config_.preprocess)
+                                  : std::numeric_limits<float>::infinity();
+    preprocessor_.process(frame.depth, frame_max_m);  // also keeps the raw depth on the device
     // The objects' vertex map only when the E-step or the object rules will read it this frame.
     const bool detector_due =
         scheduler_ != nullptr &&
         (scheduler_->async() || frame.index % config_.detector.every_n_frames == 0);
     if (!config_.objects.filter_depth &&
         (!objects_.empty() || detections != nullptr || detector_due)) {
-      object_preprocessor_.process(frame.depth);
+      object_preprocessor_.process(frame.depth, frame_max_m);
     }
     ctx_.finish();  // stage times include the device work
   }

@@ -173,6 +173,12 @@ Preprocessor::Preprocessor(cl::Context& ctx, const PreprocessOptions& options,
 
 void Preprocessor::process(const cv::Mat& depth_m) {
   checkDepth(depth_m, intrinsics_);
+  process(depth_m, options_.range_guard_per_m2 > 0 ? maxDepthInRange(depth_m, options_)
+                                                   : std::numeric_limits<float>::infinity());
+}
+
+void Preprocessor::process(const cv::Mat& depth_m, float frame_max_m) {
+  checkDepth(depth_m, intrinsics_);
   const size_t row_bytes = static_cast<size_t>(intrinsics_.width) * sizeof(float);
   if (depth_m.isContinuous()) {
     ctx_.write(input_, depth_m.ptr<float>(0), row_bytes * intrinsics_.height);
@@ -180,8 +186,7 @@ void Preprocessor::process(const cv::Mat& depth_m) {
     const cv::Mat copy = depth_m.clone();
     ctx_.write(input_, copy.ptr<float>(0), row_bytes * intrinsics_.height);
   }
-  process(input_.get(), options_.range_guard_per_m2 > 0 ? maxDepthInRange(depth_m, options_)
-                                                        : std::numeric_limits<float>::infinity());
+  process(input_.get(), frame_max_m);
 }
 
 void Preprocessor::process(cl_mem input_m, float frame_max_m) {

@@ -53,6 +53,9 @@ class Preprocessor {
   /// kernel (the range guard's frame limit from the largest depth of `depth_m`). Throws
   /// InvalidArgument naming the expected size/type on mismatch.
   void process(const cv::Mat& depth_m);
+  /// The same with the range guard's frame limit given: `frame_max_m` = maxDepthInRange of
+  /// `depth_m` (a caller that preprocesses one frame twice computes it once).
+  void process(const cv::Mat& depth_m, float frame_max_m);
   /// Runs the hole margin and the filter on a device buffer of width * height floats (metres)
   /// already filled (read, not modified). `frame_max_m`: the largest valid depth in it, for
   /// the range guard (INFINITY: unknown, the guard uses max_depth_m).
