@@ -14,6 +14,7 @@
 #include <thread>
 #include <vector>
 
+#include "bench_args.h"
 #include "pipeline/detector_scheduler.h"
 #include "pipeline/object_outputs.h"
 
@@ -152,39 +153,52 @@ void outputs(int w, int h, int frames, const std::string& dir) {
       w, h, frames, a.median, im.median, im.p99, traj_ms);
 }
 
+void usage(std::FILE* out) {
+  std::fprintf(out,
+               "usage: detector_bench [--frames N] [--detector-ms MS] [--slam-ms MS] "
+               "[--out DIR]\n");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   int frames = 300;
   double detector_ms = 100, slam_ms = 30;
   std::string dir = "/tmp/emf-detector-bench";
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string a = argv[i];
-    if (a == "--frames") {
-      frames = std::atoi(argv[i + 1]);
-    } else if (a == "--detector-ms") {
-      detector_ms = std::atof(argv[i + 1]);
-    } else if (a == "--slam-ms") {
-      slam_ms = std::atof(argv[i + 1]);
-    } else if (a == "--out") {
-      dir = argv[i + 1];
-    } else {
-      std::fprintf(stderr,
-                   "usage: detector_bench [--frames N] [--detector-ms MS] [--slam-ms MS] "
-                   "[--out DIR]\n");
-      return 2;
+  try {
+    emf::bench::ArgWalker args(argc, argv);
+    while (args.next()) {
+      if (args.is("--help") || args.is("-h")) {
+        usage(stdout);
+        return 0;
+      } else if (args.is("--frames")) {
+        frames = static_cast<int>(args.integer(1, 1000000));
+      } else if (args.is("--detector-ms")) {
+        detector_ms = args.real(0.0, 60000.0);
+      } else if (args.is("--slam-ms")) {
+        slam_ms = args.real(0.0, 60000.0);
+      } else if (args.is("--out")) {
+        dir = args.value();
+      } else {
+        args.unknown();
+      }
     }
+  } catch (const emf::bench::UsageError& e) {
+    std::fprintf(stderr, "detector_bench: %s\n", e.what());
+    usage(stderr);
+    return emf::bench::kExitUsage;
   }
-  if (frames < 1) {
-    std::fprintf(stderr, "detector_bench: --frames must be >= 1\n");
-    return 2;
+  try {
+    for (const auto& [w, h] : {std::pair{320, 240}, std::pair{640, 480}}) {
+      asyncSubmit(w, h, frames, detector_ms, slam_ms);
+    }
+    for (const auto& [w, h] : {std::pair{320, 240}, std::pair{640, 480}}) {
+      outputs(w, h, std::min(frames, 60), dir + "/" + std::to_string(w));
+    }
+    std::filesystem::remove_all(dir);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "detector_bench: %s\n", e.what());
+    return 1;
   }
-  for (const auto& [w, h] : {std::pair{320, 240}, std::pair{640, 480}}) {
-    asyncSubmit(w, h, frames, detector_ms, slam_ms);
-  }
-  for (const auto& [w, h] : {std::pair{320, 240}, std::pair{640, 480}}) {
-    outputs(w, h, std::min(frames, 60), dir + "/" + std::to_string(w));
-  }
-  std::filesystem::remove_all(dir);
   return 0;
 }

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_args.h"
 #include "dnn_decode.h"
 
 namespace {
@@ -121,32 +122,37 @@ emf_dnn::MaskRcnnTensors maskRcnnOutputs(int instances, cv::RNG& rng) {
 
 }  // namespace
 
+constexpr const char* kUsage =
+    "usage: dnn_bench [--instances N (1..20)] [--runs R] [--depth WxH]\n";
+
 int main(int argc, char** argv) {
   int instances = 20, runs = 200;
   cv::Size depth(640, 480);
   const cv::Size frame(640, 480), input(640, 640);
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    const char* value = i + 1 < argc ? argv[i + 1] : nullptr;
-    bool ok = value != nullptr;
-    if (ok && a == "--instances") {
-      instances = std::atoi(value);
-    } else if (ok && a == "--runs") {
-      runs = std::atoi(value);
-    } else if (ok && a == "--depth") {
-      ok = std::sscanf(value, "%dx%d", &depth.width, &depth.height) == 2;
-    } else {
-      ok = false;
+  try {
+    emf::bench::ArgWalker args(argc, argv);
+    while (args.next()) {
+      if (args.is("--help") || args.is("-h")) {
+        std::printf("%s", kUsage);
+        return 0;
+      } else if (args.is("--instances")) {
+        instances = static_cast<int>(args.integer(1, 20));
+      } else if (args.is("--runs")) {
+        runs = static_cast<int>(args.integer(1, 1000000));
+      } else if (args.is("--depth")) {
+        const std::string v = args.value();
+        char rest = 0;
+        if (std::sscanf(v.c_str(), "%dx%d%c", &depth.width, &depth.height, &rest) != 2 ||
+            depth.width < 1 || depth.height < 1 || depth.width > 8192 || depth.height > 8192) {
+          throw emf::bench::UsageError("--depth '" + v + "': expected WxH, each in [1, 8192]");
+        }
+      } else {
+        args.unknown();
+      }
     }
-    if (!ok) {
-      std::fprintf(stderr, "usage: dnn_bench [--instances N (1..20)] [--runs R] [--depth WxH]\n");
-      return 2;
-    }
-    ++i;
-  }
-  if (instances < 1 || instances > 20 || runs < 1 || depth.width < 1 || depth.height < 1) {
-    std::fprintf(stderr, "dnn_bench: --instances must be 1..20, --runs and --depth positive\n");
-    return 2;
+  } catch (const emf::bench::UsageError& e) {
+    std::fprintf(stderr, "dnn_bench: %s\n%s", e.what(), kUsage);
+    return emf::bench::kExitUsage;
   }
   cv::RNG rng(8);
   cv::Mat bgr(frame, CV_8UC3);

@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_args.h"
 #include "cl/context.h"
 #include "common/error.h"
 #include "common/log.h"
@@ -400,7 +401,7 @@ int main(int argc, char** argv) {
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
       auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw emf::InvalidArgument(a + " needs a value");
+        if (i + 1 >= argc) throw emf::bench::UsageError(a + " needs a value");
         return argv[++i];
       };
       if (a == "--help" || a == "-h") {
@@ -409,17 +410,17 @@ int main(int argc, char** argv) {
       } else if (a == "--data") {
         data = value();
       } else if (a == "--frames") {
-        frames = std::stoi(value());
+        frames = static_cast<int>(emf::bench::parseInteger(a, value(), 0, 1000000));
       } else if (a == "--configs") {
         configs = value();
       } else if (a == "--memory-mb") {
-        memory_mb = std::stoi(value());
+        memory_mb = static_cast<int>(emf::bench::parseInteger(a, value(), 1, 1 << 20));
       } else if (a == "--error-every") {
-        error_every = std::max(1, std::stoi(value()));
+        error_every = static_cast<int>(emf::bench::parseInteger(a, value(), 1, 1000000));
       } else if (a == "--error-stride") {
-        error_stride = std::max(1, std::stoi(value()));
+        error_stride = static_cast<int>(emf::bench::parseInteger(a, value(), 1, 4096));
       } else if (a == "--depth-scale") {
-        depth_scale = std::stod(value());
+        depth_scale = emf::bench::parseReal(a, value(), 1e-6, 1e9);
       } else if (a == "--mesh-dir") {
         mesh_dir = value();
       } else {
@@ -522,6 +523,10 @@ int main(int argc, char** argv) {
           r.surface_err_mm, r.mesh_s, r.mesh_mb, r.copy_mesh_s, r.copy_mesh_mb);
     }
     return 0;
+  } catch (const emf::bench::UsageError& e) {
+    std::fprintf(stderr, "map_bench: %s\n", e.what());
+    usage(stderr);
+    return emf::bench::kExitUsage;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "map_bench: %s\n", e.what());
     return 1;

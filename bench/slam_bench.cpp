@@ -31,6 +31,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_args.h"
 #include "common/config.h"
 #include "common/error.h"
 #include "io/eval.h"
@@ -78,24 +79,12 @@ void usage() {
       "  --peer-stride N   frame pixels used by the peer's ICP (default width/160)\n");
 }
 
-/// `text` as an integer in [lo, hi]; a usage error naming `flag` otherwise.
-int intArg(const char* flag, const std::string& text, int lo, int hi) {
-  char* end = nullptr;
-  errno = 0;
-  const long v = std::strtol(text.c_str(), &end, 10);
-  if (text.empty() || *end != '\0' || errno == ERANGE || v < lo || v > hi) {
-    throw emf::InvalidArgument(std::string(flag) + " " + text + ": expected an integer in [" +
-                               std::to_string(lo) + ", " + std::to_string(hi) + "]");
-  }
-  return static_cast<int>(v);
-}
-
 Args parseArgs(int argc, char** argv) {
   Args a;
   for (int i = 1; i < argc; ++i) {
     const std::string k = argv[i];
     auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw emf::InvalidArgument(k + " needs a value (see --help)");
+      if (i + 1 >= argc) throw emf::bench::UsageError(k + " needs a value");
       return argv[++i];
     };
     if (k == "--help" || k == "-h") {
@@ -108,7 +97,8 @@ Args parseArgs(int argc, char** argv) {
         if (!item.empty()) a.data.push_back(item);
       }
     } else if (k == "--frames") {
-      a.frames = intArg("--frames", value(), static_cast<int>(emf::io::kMinAtePairs), 100000);
+      a.frames = static_cast<int>(
+          emf::bench::parseInteger(k, value(), static_cast<long>(emf::io::kMinAtePairs), 100000));
     } else if (k == "--res") {
       const std::string r = value();
       if (r == "640") {
@@ -116,7 +106,8 @@ Args parseArgs(int argc, char** argv) {
       } else if (r == "320") {
         a.res = Resolution{320, 240, 0.02, 256};
       } else {
-        throw emf::InvalidArgument("--res " + r + ": use 640 (640x480@1cm) or 320 (320x240@2cm)");
+        throw emf::bench::UsageError("--res '" + r +
+                                     "': use 640 (640x480@1cm) or 320 (320x240@2cm)");
       }
     } else if (k == "--no-peer") {
       a.peer = false;
@@ -131,10 +122,9 @@ Args parseArgs(int argc, char** argv) {
     } else if (k == "--set") {
       a.sets.push_back(value());
     } else if (k == "--peer-stride") {
-      a.peer_source_stride = intArg("--peer-stride", value(), 1, 64);
+      a.peer_source_stride = static_cast<int>(emf::bench::parseInteger(k, value(), 1, 64));
     } else {
-      std::fprintf(stderr, "slam_bench: unknown option %s (see --help)\n", k.c_str());
-      std::exit(2);
+      throw emf::bench::UsageError("unknown option '" + k + "'");
     }
   }
   return a;
@@ -323,7 +313,7 @@ std::string fmt(double v, int decimals = 2) {
 int main(int argc, char** argv) {
   try {
     Args a = parseArgs(argc, argv);
-    if (a.data.empty()) throw emf::InvalidArgument("--data names no dataset");
+    if (a.data.empty()) throw emf::bench::UsageError("--data names no dataset");
     // The configuration emf runs with (--config, the resolution's voxel size and volume, then
     // --set): the peer gets the same voxel size, truncation and depth range, and the summary
     // names the voxel size actually used.
@@ -477,6 +467,9 @@ int main(int argc, char** argv) {
       return 1;
     }
     return 0;
+  } catch (const emf::bench::UsageError& ex) {
+    std::fprintf(stderr, "slam_bench: %s (see --help)\n", ex.what());
+    return emf::bench::kExitUsage;
   } catch (const std::exception& ex) {
     std::fprintf(stderr, "slam_bench: %s\n", ex.what());
     return 1;

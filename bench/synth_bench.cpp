@@ -4,6 +4,7 @@
 //
 // usage: synth_bench [--frames N] [--width W] [--height H] [--threads N] [--write DIR]
 //                    [preset ...]
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -12,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_args.h"
 #include "io/synth/depth_noise.h"
 #include "io/synth/detector_sim.h"
 #include "io/synth/parallel.h"
@@ -34,40 +36,51 @@ double cpuSeconds() {
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
-}  // namespace
+void usage(std::FILE* out) {
+  std::fprintf(out,
+               "usage: synth_bench [--frames N] [--width W] [--height H] [--threads N] "
+               "[--write DIR] [preset ...]\n");
+}
 
-int main(int argc, char** argv) {
+int benchMain(int argc, char** argv) {
   using namespace emf::io::synth;
   int frames = 600, width = 640, height = 480, threads = 0;
   std::string write_dir;
   std::vector<std::string> presets;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "synth_bench: %s needs a value\n", a.c_str());
-        std::exit(2);
+  try {
+    emf::bench::ArgWalker args(argc, argv);
+    while (args.next()) {
+      if (args.is("--help") || args.is("-h")) {
+        usage(stdout);
+        return 0;
+      } else if (args.is("--frames")) {
+        frames = static_cast<int>(args.integer(1, 1000000));
+      } else if (args.is("--width")) {
+        width = static_cast<int>(args.integer(16, 8192));
+      } else if (args.is("--height")) {
+        height = static_cast<int>(args.integer(16, 8192));
+      } else if (args.is("--threads")) {
+        threads = static_cast<int>(args.integer(0, 1024));
+      } else if (args.is("--write")) {
+        write_dir = args.value();
+      } else if (args.current().rfind("-", 0) == 0) {
+        args.unknown();
+      } else {
+        presets.push_back(args.current());
       }
-      return argv[++i];
-    };
-    if (a == "--frames") {
-      frames = std::atoi(value().c_str());
-    } else if (a == "--width") {
-      width = std::atoi(value().c_str());
-    } else if (a == "--height") {
-      height = std::atoi(value().c_str());
-    } else if (a == "--threads") {
-      threads = std::atoi(value().c_str());
-    } else if (a == "--write") {
-      write_dir = value();
-    } else if (a.rfind("--", 0) == 0) {
-      std::fprintf(stderr,
-                   "usage: synth_bench [--frames N] [--width W] [--height H] [--threads N] "
-                   "[--write DIR] [preset ...]\n");
-      return 2;
-    } else {
-      presets.push_back(a);
     }
+    for (const auto& p : presets) {
+      const std::vector<std::string> known = presetNames();
+      if (std::find(known.begin(), known.end(), p) == known.end()) {
+        std::string list;
+        for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+        throw emf::bench::UsageError("unknown preset '" + p + "' (presets: " + list + ")");
+      }
+    }
+  } catch (const emf::bench::UsageError& e) {
+    std::fprintf(stderr, "synth_bench: %s\n", e.what());
+    usage(stderr);
+    return emf::bench::kExitUsage;
   }
   if (presets.empty()) presets = presetNames();
   std::printf("synth_bench: %d frames at %dx%d, threads %d (0 = all %d cores)\n", frames, width,
@@ -160,4 +173,15 @@ int main(int argc, char** argv) {
                 write);
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return benchMain(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "synth_bench: %s\n", e.what());
+    return 1;
+  }
 }

@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_args.h"
 #include "track/preprocess.h"
 #include "track/tracker.h"
 #include "track_test_support.h"
@@ -379,23 +380,31 @@ int main(int argc, char** argv) {
   bool quick = false;
   bool kernels_only = false;
   bool sequences_only = false;
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--data") && i + 1 < argc) {
-      data = argv[++i];
-    } else if (!std::strcmp(argv[i], "--trials") && i + 1 < argc) {
-      trials = std::max(1, std::atoi(argv[++i]));
-    } else if (!std::strcmp(argv[i], "--quick")) {
-      quick = true;
-    } else if (!std::strcmp(argv[i], "--kernels-only")) {
-      kernels_only = true;
-    } else if (!std::strcmp(argv[i], "--sequences")) {
-      sequences_only = true;
-    } else {
-      std::fprintf(stderr,
-                   "usage: track_bench [--data DIR] [--trials N] [--quick] [--kernels-only] "
-                   "[--sequences]\n");
-      return 2;
+  const char* usage =
+      "usage: track_bench [--data DIR] [--trials N] [--quick] [--kernels-only] [--sequences]\n";
+  try {
+    emf::bench::ArgWalker args(argc, argv);
+    while (args.next()) {
+      if (args.is("--help") || args.is("-h")) {
+        std::printf("%s", usage);
+        return 0;
+      } else if (args.is("--data")) {
+        data = args.value();
+      } else if (args.is("--trials")) {
+        trials = static_cast<int>(args.integer(1, 100000));
+      } else if (args.is("--quick")) {
+        quick = true;
+      } else if (args.is("--kernels-only")) {
+        kernels_only = true;
+      } else if (args.is("--sequences")) {
+        sequences_only = true;
+      } else {
+        args.unknown();
+      }
     }
+  } catch (const emf::bench::UsageError& e) {
+    std::fprintf(stderr, "track_bench: %s\n%s", e.what(), usage);
+    return emf::bench::kExitUsage;
   }
   try {
     emf::cl::Context ctx(emf::cl::ClOptions{});

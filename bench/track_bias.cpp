@@ -36,6 +36,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_args.h"
 #include "cl/context.h"
 #include "common/config.h"
 #include "common/error.h"
@@ -62,56 +63,45 @@ struct Args {
   std::vector<std::string> sets;  // section.key=value overrides of the defaults
 };
 
-[[noreturn]] void usage(const std::string& message) {
-  std::cerr
-      << "track_bias: " << message
-      << "\nusage: track_bias --data DIR [--track-data DIR2] [--frames N] [--reverse] "
-         "[--depth-scale S] "
-         "[--set SECTION.KEY=VALUE]... [--per-frame] [--decompose] [--prefuse] [--start-at-gt]\n";
-  std::exit(2);
-}
-
-double number(const std::string& option, const char* text) {
-  char* end = nullptr;
-  const double v = std::strtod(text, &end);
-  if (end == text || *end != '\0' || !std::isfinite(v) || v < 0) {
-    usage(option + " " + text + ": expected a non-negative number");
-  }
-  return v;
-}
+const char* const kUsage =
+    "usage: track_bias --data DIR [--track-data DIR2] [--frames N] [--reverse] [--depth-scale S]\n"
+    "                  [--set SECTION.KEY=VALUE]... [--per-frame] [--decompose] [--prefuse]\n"
+    "                  [--start-at-gt]\n";
 
 Args parse(int argc, char** argv) {
   Args a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string o = argv[i];
-    const bool has_value = i + 1 < argc;
-    if (o == "--reverse") {
+  emf::bench::ArgWalker args(argc, argv);
+  while (args.next()) {
+    if (args.is("--help") || args.is("-h")) {
+      std::printf("%s", kUsage);
+      std::exit(0);
+    } else if (args.is("--reverse")) {
       a.reverse = true;
-    } else if (o == "--per-frame") {
+    } else if (args.is("--per-frame")) {
       a.per_frame = true;
-    } else if (o == "--decompose") {
+    } else if (args.is("--decompose")) {
       a.decompose = true;
-    } else if (o == "--prefuse") {
+    } else if (args.is("--prefuse")) {
       a.prefuse = true;
-    } else if (o == "--start-at-gt") {
+    } else if (args.is("--start-at-gt")) {
       a.start_at_gt = true;
-    } else if (o == "--data" && has_value) {
-      a.data = argv[++i];
-    } else if (o == "--track-data" && has_value) {
-      a.track_data = argv[++i];
-    } else if (o == "--frames" && has_value) {
-      a.frames = static_cast<int>(number(o, argv[++i]));
-    } else if (o == "--depth-scale" && has_value) {
-      a.depth_scale = number(o, argv[++i]);
-    } else if (o == "--set" && has_value) {
-      a.sets.push_back(argv[++i]);
-    } else if (o == "--help" || o == "-h") {
-      usage("help");
+    } else if (args.is("--data")) {
+      a.data = args.value();
+    } else if (args.is("--track-data")) {
+      a.track_data = args.value();
+    } else if (args.is("--frames")) {
+      a.frames = static_cast<int>(args.integer(0, 10000000));
+    } else if (args.is("--depth-scale")) {
+      a.depth_scale = args.real(0.0, 1e9);
+    } else if (args.is("--set")) {
+      a.sets.push_back(args.value());
     } else {
-      usage("unknown argument or missing value: '" + o + "'");
+      args.unknown();
     }
   }
-  if (a.data.empty()) usage("--data DIR is required (a TUM folder with groundtruth.txt)");
+  if (a.data.empty()) {
+    throw emf::bench::UsageError("--data DIR is required (a TUM folder with groundtruth.txt)");
+  }
   return a;
 }
 
@@ -174,7 +164,14 @@ cv::Mat classify(const cv::Mat& depth) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const Args args = parse(argc, argv);
+  Args parsed;
+  try {
+    parsed = parse(argc, argv);
+  } catch (const emf::bench::UsageError& e) {
+    std::fprintf(stderr, "track_bias: %s\n%s", e.what(), kUsage);
+    return emf::bench::kExitUsage;
+  }
+  const Args& args = parsed;
   try {
     emf::Config config;
     if (args.depth_scale > 0) config.source.depth_scale = args.depth_scale;
