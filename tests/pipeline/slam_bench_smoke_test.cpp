@@ -31,8 +31,8 @@ TEST(SlamBench, RejectsAnUnknownResolution) {
   std::string log;
   const int code =
       test::runCommand(std::string(EMF_SLAM_BENCH_PATH) + " --res 123 --no-peer", &log);
-  EXPECT_EQ(code, 1);
-  EXPECT_NE(log.find("--res 123: use 640 (640x480@1cm) or 320 (320x240@2cm)"), std::string::npos)
+  EXPECT_EQ(code, 2) << log;  // a usage error
+  EXPECT_NE(log.find("--res '123': use 640 (640x480@1cm) or 320 (320x240@2cm)"), std::string::npos)
       << log;
 }
 
