@@ -1,6 +1,7 @@
 // E-step of the EM loop (METHOD.md step 2): per pixel u and volume i, the likelihood
 //   p(u | i) = alpha / (2 sigma) * exp(-|psi_i(T_i p(u))| / sigma) * p_fg,i + (1 - alpha) p_U
-// when T_i p(u) lies inside volume i's grid, else 0; then q_i(u) = p(u | i) / sum_j p(u | j).
+// when T_i p(u) lies inside volume i's grid and its claim box (claim_lo <= p < claim_hi, volume
+// frame; objects.claim_region), else 0; then q_i(u) = p(u | i) / sum_j p(u | j).
 // Inside the grid but where the SDF is not observed (NaN sample, or an interpolated weight below
 // min_weight), |psi| = truncation: the volume neither claims nor rejects the point (the
 // authors' volumes start at +truncation). The weight floor keeps a voxel that was integrated
@@ -26,7 +27,8 @@
 __kernel void estep_likelihood16(__global const float4* vertex, const int count, const float4 r0,
                                  const float4 r1, const float4 r2, __global const int* index,
                                  __global const int* count_index, const int has_counts,
-                                 const int4 dims, __global const short2* voxels,
+                                 const int4 dims, const float4 claim_lo,
+                                 const float4 claim_hi, __global const short2* voxels,
                                  const float voxel_size, const float truncation, const float sigma,
                                  const float alpha, const float p_uniform, const float min_weight,
                                  const int pfg_mode, const int first, __global float* likelihood,
@@ -52,7 +54,8 @@ __kernel void estep_likelihood16(__global const float4* vertex, const int count,
                                  (float)(dims.z * EMF_BLOCK)) *
                         voxel_size;
   const int16 inside = (pw != 0.0f) & (x >= 0.0f) & (y >= 0.0f) & (z >= 0.0f) & (x < extent.x) &
-                       (y < extent.y) & (z < extent.z);
+                       (y < extent.y) & (z < extent.z) & (x >= claim_lo.x) & (y >= claim_lo.y) &
+                       (z >= claim_lo.z) & (x < claim_hi.x) & (y < claim_hi.y) & (z < claim_hi.z);
   float16 lik = 0.0f;
   float16 abs_psi = NAN;
   if (any(inside)) {

@@ -30,7 +30,7 @@ float associationLikelihood(const EStepHostVolume& volume, const Eigen::Vector3f
     p[r] = M(r, 0) * p_camera.x() + M(r, 1) * p_camera.y() + M(r, 2) * p_camera.z() + M(r, 3);
   }
   *abs_psi = NAN;
-  if (!insideGrid(volume.view, p)) return 0.0f;
+  if (!insideGrid(volume.view, p) || !volume.claim.contains(p)) return 0.0f;
   float psi = NAN, weight = 0.0f;
   Eigen::Vector3f gradient;
   const bool ok = map::sampleSdfReference(volume.view, p, &psi, &weight, &gradient);
@@ -119,13 +119,15 @@ void EStep::compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes) 
     const cl_int4 dims = {
         {v.view.dims_blocks.x(), v.view.dims_blocks.y(), v.view.dims_blocks.z(), 0}};
     const cl_int has_counts = v.count_index != nullptr ? 1 : 0;
+    const cl_float4 claim_lo = {{v.claim.lo.x(), v.claim.lo.y(), v.claim.lo.z(), 0.0f}};
+    const cl_float4 claim_hi = {{v.claim.hi.x(), v.claim.hi.y(), v.claim.hi.z(), 0.0f}};
     // 16 pixels per work item.
     cl::setArgs(likelihood16_, vertex_map, count, rows[0], rows[1], rows[2], v.view.index,
-                has_counts ? v.count_index : v.view.index, has_counts, dims, v.view.voxels,
-                v.view.voxel_size_m, v.view.truncation_m, static_cast<float>(options_.sigma_m),
-                static_cast<float>(options_.alpha), static_cast<float>(options_.p_uniform),
-                static_cast<float>(options_.min_weight), pfg_mode,
-                static_cast<cl_int>(i == 0 ? 1 : 0), q_[i].get(), sum_.get(), best_.get(),
+                has_counts ? v.count_index : v.view.index, has_counts, dims, claim_lo, claim_hi,
+                v.view.voxels, v.view.voxel_size_m, v.view.truncation_m,
+                static_cast<float>(options_.sigma_m), static_cast<float>(options_.alpha),
+                static_cast<float>(options_.p_uniform), static_cast<float>(options_.min_weight),
+                pfg_mode, static_cast<cl_int>(i == 0 ? 1 : 0), q_[i].get(), sum_.get(), best_.get(),
                 residual_.get());
     cl::enqueue(ctx_.queue(), likelihood16_, static_cast<size_t>((count + 15) / 16), 0, 0, 64);
   }

@@ -18,21 +18,38 @@
 
 namespace emf::em {
 
+/// A claim region that bounds nothing.
+constexpr float kUnboundedClaim = 1e30f;
+
+/// The part of a volume's grid a volume may claim pixels in (volume frame, metres; objects:
+/// ObjectOptions::claim_region). Points outside it are treated as outside the volume.
+struct ClaimBox {
+  Eigen::Vector3f lo = Eigen::Vector3f::Constant(-kUnboundedClaim);
+  Eigen::Vector3f hi = Eigen::Vector3f::Constant(kUnboundedClaim);
+  /// lo <= p < hi on every axis (the grid's own test).
+  bool contains(const Eigen::Vector3f& p) const {
+    return (p.array() >= lo.array()).all() && (p.array() < hi.array()).all();
+  }
+};
+
 /// One volume as the E-step reads it.
 struct EStepVolume {
   map::VolumeDeviceView view;
   cl_mem count_index = nullptr;  // objects: the count-block index grid; nullptr = p_fg 1
   Eigen::Isometry3d T_volume_camera = Eigen::Isometry3d::Identity();
+  ClaimBox claim;
 };
 
 /// The same on the host, for the CPU reference.
 struct EStepHostVolume {
   map::VolumeHostView view;  // view.count_index set for objects
   Eigen::Isometry3d T_volume_camera = Eigen::Isometry3d::Identity();
+  ClaimBox claim;
 };
 
-/// Likelihood p(u | i) of one camera-frame point for one volume (0 outside its grid), the CPU
-/// mirror of estep_likelihood16 (per lane). *abs_psi receives |psi| used (NaN outside).
+/// Likelihood p(u | i) of one camera-frame point for one volume (0 outside its grid or its
+/// claim box), the CPU mirror of estep_likelihood16 (per lane). *abs_psi receives |psi| used
+/// (NaN outside).
 float associationLikelihood(const EStepHostVolume& volume, const Eigen::Vector3f& p_camera,
                             const EmOptions& options, float* abs_psi);
 

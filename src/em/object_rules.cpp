@@ -65,6 +65,33 @@ double percentile(std::vector<double> v, double p) {
 }
 }  // namespace
 
+Eigen::AlignedBox3d claimRegion(const std::vector<Eigen::Vector3d>& points,
+                                const Eigen::Vector3d& camera, const ObjectOptions& options) {
+  Eigen::AlignedBox3d box;  // empty
+  if (points.size() < 10) return box;
+  Eigen::Vector3d lo, hi, core_lo, core_hi;
+  for (int axis = 0; axis < 3; ++axis) {
+    std::vector<double> c;
+    c.reserve(points.size());
+    for (const auto& p : points) c.push_back(p[axis]);
+    lo[axis] = percentile(c, 0.02);
+    hi[axis] = percentile(c, 0.98);
+    core_lo[axis] = percentile(c, 0.1);
+    core_hi[axis] = percentile(c, 0.9);
+  }
+  const double extent = (core_hi - core_lo).maxCoeff();
+  const Eigen::Vector3d margin = Eigen::Vector3d::Constant(options.claim_margin * extent);
+  box.extend(lo - margin);
+  box.extend(hi + margin);
+  const Eigen::Vector3d away = 0.5 * (core_lo + core_hi) - camera;
+  if (away.norm() > 0) {
+    const Eigen::Vector3d shift = away.normalized() * (options.claim_depth * extent);
+    box.extend(box.min() + shift);
+    box.extend(box.max() + shift);
+  }
+  return box;
+}
+
 VolumePlacement placeObject(const std::vector<Eigen::Vector3d>& points_world,
                             const ObjectOptions& options) {
   VolumePlacement out;

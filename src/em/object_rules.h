@@ -54,6 +54,15 @@ struct VolumePlacement {
 VolumePlacement placeObject(const std::vector<Eigen::Vector3d>& points_world,
                             const ObjectOptions& options);
 
+/// The claim region of one detection (ObjectOptions::claim_region), in the frame of the points
+/// (the object's volume frame): per axis the 2nd-98th percentile box of the detection's points,
+/// widened on every side by claim_margin x the largest 10th-90th percentile extent, then
+/// stretched by claim_depth x that extent along the direction from `camera` to the 10th-90th
+/// box's centre (the box and its shifted copy, bounded together). Empty with fewer than 10
+/// points.
+Eigen::AlignedBox3d claimRegion(const std::vector<Eigen::Vector3d>& points,
+                                const Eigen::Vector3d& camera, const ObjectOptions& options);
+
 /// An oriented box: the volume [0, size] in its own frame, placed by T_world_box.
 struct OrientedBox {
   Eigen::Isometry3d T_world_box = Eigen::Isometry3d::Identity();

@@ -58,13 +58,26 @@ cv::Mat SlamSystem::downloadVertexMap() const {
 std::vector<em::EStepVolume> SlamSystem::eStepVolumes(const Eigen::Isometry3d& T_world_camera,
                                                       const std::vector<Eigen::Isometry3d>& T_oc) {
   std::vector<em::EStepVolume> volumes;
-  volumes.push_back({deviceView(*background_), nullptr,
-                     background_->T_world_volume().inverse() * T_world_camera});
+  volumes.push_back({deviceView(*background_),
+                     nullptr,
+                     background_->T_world_volume().inverse() * T_world_camera,
+                     {}});
   estep_ids_ = {0};
   for (size_t k = 0; k < objects_.size(); ++k) {
     TrackedObject& o = objects_[k];
     o.e_step_slot = static_cast<int>(volumes.size());
-    volumes.push_back({deviceView(*o.volume), o.volume->countIndex().get(), T_oc[k]});
+    volumes.push_back({deviceView(*o.volume), o.volume->countIndex().get(), T_oc[k], {}});
+    if (!o.claim_initial.isEmpty()) {
+      // Growth shifts the grid by whole blocks: the region's corners in today's volume frame.
+      const Eigen::Isometry3d& T_volume_initial = o.volume->T_volume_initial();
+      Eigen::AlignedBox3d claim;
+      for (int c = 0; c < 8; ++c) {
+        claim.extend(T_volume_initial *
+                     o.claim_initial.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)));
+      }
+      volumes.back().claim.lo = claim.min().cast<float>();
+      volumes.back().claim.hi = claim.max().cast<float>();
+    }
     estep_ids_.push_back(o.id);
   }
   return volumes;
@@ -236,10 +249,20 @@ void SlamSystem::matchDetections(const DetectionBatch& batch, FrameOutcome* out)
     // must fit in the volume.
     if (vertex.empty()) vertex = downloadVertexMap();
     std::vector<Eigen::Vector3d> pts = maskedPoints(vertex, d.mask);
-    if (pts.size() < 10 || opt.max_grow_blocks == 0) continue;
+    if (pts.size() < 10) continue;
     const Eigen::Isometry3d T_volume_camera =
         o.volume->T_world_volume().inverse() * T_world_camera_;
     for (auto& p : pts) p = T_volume_camera * p;
+    // The claim region grows by what this detection shows (kept in the creation frame).
+    if (opt.claim_region) {
+      const Eigen::AlignedBox3d shown = em::claimRegion(pts, T_volume_camera.translation(), opt);
+      const Eigen::Isometry3d T_initial_volume = o.volume->T_volume_initial().inverse();
+      for (int c = 0; c < 8; ++c) {
+        o.claim_initial.extend(T_initial_volume *
+                               shown.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)));
+      }
+    }
+    if (opt.max_grow_blocks == 0) continue;
     const Eigen::Vector3d lo = percentile(pts, 0.1), hi = percentile(pts, 0.9);
     const Eigen::Vector3d pad = (hi - lo) * (opt.padding - 1.0) / 2.0;
     const map::VolumeSpec& spec = o.volume->spec();
@@ -321,6 +344,15 @@ bool SlamSystem::createObject(const io::Detection& d, const cv::Mat& vertex) {
   o.volume = std::make_unique<map::Volume>(*pool_, spec, T_world_volume);
   o.last_motion = last_motion_;  // at first assumed still in the world
   o.first_frame = o.last_frame = frames_;
+  if (opt.claim_region) {
+    // The creation frame is the volume frame now.
+    const Eigen::Isometry3d T_volume_world = T_world_volume.inverse();
+    std::vector<Eigen::Vector3d> in_volume;
+    in_volume.reserve(points.size());
+    for (const auto& p : points) in_volume.push_back(T_volume_world * p);
+    o.claim_initial =
+        em::claimRegion(in_volume, T_volume_world * T_world_camera_.translation(), opt);
+  }
   // First integration: weighted by the detection's mask, which also seeds the counts.
   const cv::Mat mask = d.mask.isContinuous() ? d.mask : d.mask.clone();
   ctx_.write(new_weights_, mask.data, mask.total() * sizeof(float));

@@ -102,6 +102,9 @@ struct TrackedObject {
   int hidden_frames = 0;
   int pool_full_frames = 0;  // frames on which some of its blocks found no slot in the pool
   int e_step_slot = 0;       // index of this object in the current E-step (1..)
+  /// Where the object claims pixels in the E-step (objects.claim_region), in its frame at
+  /// creation (volume->T_world_initial(): growth does not move it). Empty: the whole volume.
+  Eigen::AlignedBox3d claim_initial;
 };
 
 class SlamSystem {

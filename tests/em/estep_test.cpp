@@ -135,9 +135,9 @@ TEST_P(EStepModes, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
   options.association = GetParam();
   const bool em_mode = options.association == "em";
   std::vector<EStepHostVolume> host = {
-      {background.view(), T_bg_camera},
-      {obj1.view(), obj1.T_background_object.inverse() * T_bg_camera},
-      {obj2.view(), obj2.T_background_object.inverse() * T_bg_camera}};
+      {background.view(), T_bg_camera, {}},
+      {obj1.view(), obj1.T_background_object.inverse() * T_bg_camera, {}},
+      {obj2.view(), obj2.T_background_object.inverse() * T_bg_camera, {}}};
   cv::Mat residual_ref;
   const std::vector<cv::Mat> q_ref = eStepReference(host, vertex, options, &residual_ref);
 
@@ -156,7 +156,7 @@ TEST_P(EStepModes, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
   // 16-lane likelihood kernel (the first one initialises sum, best and residual).
   {
     const std::vector<cv::Mat> q_twice_ref = eStepReference({host[0], host[0]}, vertex, options);
-    const EStepVolume bg{d_bg.view, nullptr, host[0].T_volume_camera};
+    const EStepVolume bg{d_bg.view, nullptr, host[0].T_volume_camera, {}};
     estep.compute(d_vertex.get(), {bg, bg});
     for (int i = 0; i < 2; ++i) {
       EXPECT_LT(cv::norm(estep.downloadQ(i), q_twice_ref[static_cast<size_t>(i)], cv::NORM_INF),
@@ -164,9 +164,9 @@ TEST_P(EStepModes, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
           << "volume " << i;
     }
   }
-  estep.compute(d_vertex.get(), {{d_bg.view, nullptr, host[0].T_volume_camera},
-                                 {d_1.view, c_1.get(), host[1].T_volume_camera},
-                                 {d_2.view, c_2.get(), host[2].T_volume_camera}});
+  estep.compute(d_vertex.get(), {{d_bg.view, nullptr, host[0].T_volume_camera, {}},
+                                 {d_1.view, c_1.get(), host[1].T_volume_camera, {}},
+                                 {d_2.view, c_2.get(), host[2].T_volume_camera, {}}});
   ctx().finish();
   ASSERT_EQ(estep.volumeCount(), 3);
 
@@ -226,6 +226,43 @@ TEST_P(EStepModes, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
   ASSERT_GT(wall_px, 2000);
   EXPECT_GT(box_ok, 0.9 * box_px) << box_ok << " of " << box_px;
   EXPECT_GT(wall_ok, 0.9 * wall_px) << wall_ok << " of " << wall_px;
+
+  // Object 1 claims only the half of its grid with x below the middle (objects.claim_region):
+  // beyond it, it gets q_1 = 0 as outside its grid, and the kernel still matches the reference.
+  const map::VolumeHostView v1 = obj1.view();
+  ClaimBox half;
+  half.hi.x() = 0.5f * static_cast<float>(v1.dims_blocks.x() * map::kBlockSize) * v1.voxel_size_m;
+  std::vector<EStepHostVolume> host_half = host;
+  host_half[1].claim = half;
+  const std::vector<cv::Mat> q_half_ref = eStepReference(host_half, vertex, options);
+  estep.compute(d_vertex.get(), {{d_bg.view, nullptr, host[0].T_volume_camera, {}},
+                                 {d_1.view, c_1.get(), host[1].T_volume_camera, half},
+                                 {d_2.view, c_2.get(), host[2].T_volume_camera, {}}});
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_LT(cv::norm(estep.downloadQ(i), q_half_ref[static_cast<size_t>(i)], cv::NORM_INF),
+              kQTolerance)
+        << "volume " << i << " with object 1 claiming half its grid";
+  }
+  const cv::Mat q1_half = estep.downloadQ(1);
+  int cut = 0, cut_nonzero = 0, kept = 0;
+  for (int v = 0; v < vertex.rows; ++v) {
+    for (int u = 0; u < vertex.cols; ++u) {
+      const cv::Vec4f p = vertex.at<cv::Vec4f>(v, u);
+      if (p[3] == 0.0f) continue;
+      const Eigen::Vector3f in_1 =
+          (host[1].T_volume_camera * Eigen::Vector3d(p[0], p[1], p[2])).cast<float>();
+      if (q1.at<float>(v, u) < 0.5f) continue;  // object 1's own pixels without the box
+      if (in_1.x() >= half.hi.x()) {
+        ++cut;
+        if (q1_half.at<float>(v, u) != 0.0f) ++cut_nonzero;
+      } else if (q1_half.at<float>(v, u) >= 0.5f) {
+        ++kept;
+      }
+    }
+  }
+  EXPECT_GT(cut, 50);
+  EXPECT_EQ(cut_nonzero, 0);
+  EXPECT_GT(kept, 50);
 }
 
 INSTANTIATE_TEST_SUITE_P(Association, EStepModes, ::testing::Values("em", "pfg"));
@@ -237,7 +274,7 @@ TEST(EStepReference, LikelihoodFollowsTheMethodFormula) {
       test::volumeFromSdf([](const Eigen::Vector3f& x) { return 0.5f - x.z(); },
                           Eigen::Vector3i::Constant(8), 0.02f, 0.2f, 5.0f);
   EmOptions o;
-  EStepHostVolume vol{plane.view(), Eigen::Isometry3d::Identity()};
+  EStepHostVolume vol{plane.view(), Eigen::Isometry3d::Identity(), {}};
   for (const float d : {0.0f, 0.01f, 0.03f, -0.05f}) {
     float abs_psi = 0;
     const float lik =
@@ -250,6 +287,14 @@ TEST(EStepReference, LikelihoodFollowsTheMethodFormula) {
   float abs_psi = 0;
   EXPECT_EQ(associationLikelihood(vol, Eigen::Vector3f(-0.1f, 0.5f, 0.5f), o, &abs_psi), 0.0f);
   EXPECT_TRUE(std::isnan(abs_psi));
+  // A claim box ending at x = 0.6: the point at x = 0.61 is outside it (0, NaN), one at 0.59
+  // keeps the formula.
+  vol.claim.hi.x() = 0.6f;
+  EXPECT_EQ(associationLikelihood(vol, Eigen::Vector3f(0.61f, 0.65f, 0.5f), o, &abs_psi), 0.0f);
+  EXPECT_TRUE(std::isnan(abs_psi));
+  const double at_surface = o.alpha / (2 * o.sigma_m) + (1 - o.alpha) * o.p_uniform;
+  EXPECT_NEAR(associationLikelihood(vol, Eigen::Vector3f(0.59f, 0.65f, 0.5f), o, &abs_psi),
+              at_surface, 1e-2 * at_surface);
 }
 
 }  // namespace

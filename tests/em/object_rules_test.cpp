@@ -94,6 +94,39 @@ TEST(ObjectRules, PlacementFromPercentilesWithPadding) {
   EXPECT_EQ(placeObject({{0, 0, 0}}, o).extent_m, 0.0);
 }
 
+TEST(ObjectRules, ClaimRegionWidensTheShownBoxAndStretchesItAwayFromTheCamera) {
+  // A 1 m x 0.5 m patch at z = 2 facing the camera, points every cm: per axis the 2nd-98th
+  // percentiles are x 0.02-0.98, y 0.01-0.49, z 2; the largest 10th-90th extent is 0.8 (x).
+  std::vector<Eigen::Vector3d> pts;
+  for (int i = 0; i <= 100; ++i) {
+    for (int j = 0; j <= 50; ++j) pts.emplace_back(0.01 * i, 0.01 * j, 2.0);
+  }
+  const Eigen::Vector3d camera(0.5, 0.25, 0.0);  // looks along +z at the patch's centre
+  ObjectOptions o;
+  o.claim_margin = 0.5;  // 0.4 m on every side
+  o.claim_depth = 1.0;   // 0.8 m further away from the camera
+  const Eigen::AlignedBox3d box = claimRegion(pts, camera, o);
+  constexpr double kTol = 1e-9;
+  EXPECT_NEAR(box.min().x(), 0.02 - 0.4, kTol);
+  EXPECT_NEAR(box.max().x(), 0.98 + 0.4, kTol);
+  EXPECT_NEAR(box.min().y(), 0.01 - 0.4, kTol);
+  EXPECT_NEAR(box.max().y(), 0.49 + 0.4, kTol);
+  EXPECT_NEAR(box.min().z(), 2.0 - 0.4, kTol);  // nothing is added towards the camera
+  EXPECT_NEAR(box.max().z(), 2.0 + 0.4 + 0.8, kTol);
+  // Seen from the other side, the region grows towards -z instead.
+  const Eigen::AlignedBox3d behind = claimRegion(pts, Eigen::Vector3d(0.5, 0.25, 4.0), o);
+  EXPECT_NEAR(behind.min().z(), 2.0 - 0.4 - 0.8, kTol);
+  EXPECT_NEAR(behind.max().z(), 2.0 + 0.4, kTol);
+  // No margin, no depth: the shown box itself.
+  o.claim_margin = 0.0;
+  o.claim_depth = 0.0;
+  const Eigen::AlignedBox3d shown = claimRegion(pts, camera, o);
+  EXPECT_NEAR(shown.min().x(), 0.02, kTol);
+  EXPECT_NEAR(shown.max().z(), 2.0, kTol);
+  // Fewer than 10 points: empty (the object keeps its whole volume until a detection shows it).
+  EXPECT_TRUE(claimRegion({pts.begin(), pts.begin() + 9}, camera, o).isEmpty());
+}
+
 TEST(ObjectRules, BoxIoU) {
   OrientedBox a, b;
   a.size_m = b.size_m = Eigen::Vector3d(1, 1, 1);
