@@ -253,9 +253,15 @@ void SlamSystem::matchDetections(const DetectionBatch& batch, FrameOutcome* out)
     const Eigen::Isometry3d T_volume_camera =
         o.volume->T_world_volume().inverse() * T_world_camera_;
     for (auto& p : pts) p = T_volume_camera * p;
-    // The claim region grows by what this detection shows (kept in the creation frame).
+    // The claim region grows by what this detection shows of the object: its largest
+    // depth-continuous part, as at creation (a mask spilling onto the wall behind would stretch
+    // the region to the wall). Kept in the creation frame.
     if (opt.claim_region) {
-      const Eigen::AlignedBox3d shown = em::claimRegion(pts, T_volume_camera.translation(), opt);
+      std::vector<Eigen::Vector3d> shown_pts =
+          maskedPoints(vertex, em::creationMask(d.mask, vertex, opt));
+      for (auto& p : shown_pts) p = T_volume_camera * p;
+      const Eigen::AlignedBox3d shown =
+          em::claimRegion(shown_pts, T_volume_camera.translation(), opt);
       const Eigen::Isometry3d T_initial_volume = o.volume->T_volume_initial().inverse();
       for (int c = 0; c < 8; ++c) {
         o.claim_initial.extend(T_initial_volume *
