@@ -110,8 +110,9 @@ typedef struct emf_frame_result {
 typedef enum emf_object_state {
   EMF_OBJECT_TRACKED = 1,   /**< tracked (and integrated) in this frame */
   EMF_OBJECT_INVISIBLE = 2, /**< alive but hidden behind nearer surfaces in this frame
-                                 (objects.hidden_fraction): not tracked, its pose held still in
-                                 the world, not integrated */
+                                 (objects.hidden_fraction) or leaving the view
+                                 (objects.leaving_fraction): not tracked, its pose held still
+                                 in the world, not integrated */
   EMF_OBJECT_DELETED = 3,   /**< deleted in this frame (reported once) */
   EMF_OBJECT_LOST = 4       /**< tracking of the object failed in this frame: pose kept */
 } emf_object_state;

@@ -90,6 +90,19 @@ struct ObjectOptions {
   /// Objects hidden on more than this many frames in a row are deleted: an object moved while
   /// hidden would be re-acquired from a stale pose. 0 = never.
   int max_hidden_frames = 300;
+  /// Leaving the view (not in the paper): an object of which less than this fraction of its
+  /// model's projection lies inside the image (its own ray cast over a view twice as wide and
+  /// high, at half the frame's resolution; only cast when its visibility cast touches the image
+  /// edge) is held on the next frame like a hidden one: its pose held still in the world, not
+  /// tracked or integrated. The sliver left in view does not fix the pose: it slides along the
+  /// border (occlusion preset, 640x480: the suitcase 15-55 cm off on its last 6 frames in
+  /// view, 4-15 cm for a box in tests/pipeline/slam_visibility_test.cpp). Unlike a hidden
+  /// object it is still deleted when invisible or by its mean association, so the model of a
+  /// mover that left does not stay. 0 = off (the paper).
+  double leaving_fraction = 0.5;
+  /// An object held as leaving is tracked again once at least this fraction of its projection
+  /// is inside the image (at least leaving_fraction).
+  double in_view_again_fraction = 0.6;
   int max_objects = 8;
   /// An object is not created when its first integration leaves less than this fraction of the
   /// voxel pool free: the background (and the objects' growth) keep room in a fixed pool.
@@ -196,6 +209,12 @@ struct ObjectOptions {
            "hidden (at most hidden_fraction)");
     b.integer("max_hidden_frames", max_hidden_frames, 0, 100000, "frames",
               "objects hidden on more frames in a row are deleted (0 = never)");
+    b.real("leaving_fraction", leaving_fraction, 0.0, 1.0, "",
+           "an object with less than this fraction of its projection inside the image is held "
+           "still, not tracked (0 = off, the paper)");
+    b.real("in_view_again_fraction", in_view_again_fraction, 0.0, 1.0, "",
+           "an object held as leaving is tracked again once this fraction of its projection is "
+           "inside the image (at least leaving_fraction)");
     b.boolean("free_space_full_weight", free_space_full_weight,
               "object volumes integrate free space with weight 1 whatever q (the authors' "
               "rule; off: weighted by q, which keeps other surfaces from eroding the object)");

@@ -327,6 +327,32 @@ bool isHidden(const Occlusion& occlusion, const ObjectOptions& options, bool was
   return occlusion.hiddenFraction() >= threshold;
 }
 
+double inViewFraction(const cv::Mat& wide_ids, int object_id, const cv::Rect& frame) {
+  CV_Assert(wide_ids.type() == CV_32S &&
+            (frame & cv::Rect(0, 0, wide_ids.cols, wide_ids.rows)) == frame);
+  const int all = cv::countNonZero(idMask(wide_ids, object_id));
+  if (all == 0) return 1.0;
+  return static_cast<double>(cv::countNonZero(idMask(wide_ids(frame), object_id))) / all;
+}
+
+bool touchesImageEdge(const cv::Mat& object_ids, int object_id) {
+  const int w = object_ids.cols, h = object_ids.rows;
+  if (w == 0 || h == 0) return false;
+  for (const cv::Rect& edge : {cv::Rect(0, 0, w, 1), cv::Rect(0, h - 1, w, 1), cv::Rect(0, 0, 1, h),
+                               cv::Rect(w - 1, 0, 1, h)}) {
+    if (cv::countNonZero(idMask(object_ids(edge), object_id)) > 0) return true;
+  }
+  return false;
+}
+
+bool isLeaving(double in_view_fraction, const ObjectOptions& options, bool was_leaving) {
+  if (options.leaving_fraction <= 0.0) return false;
+  const double threshold = was_leaving
+                               ? std::max(options.in_view_again_fraction, options.leaving_fraction)
+                               : options.leaving_fraction;
+  return in_view_fraction < threshold;
+}
+
 bool hiddenTooLong(int consecutive_hidden_frames, const ObjectOptions& options) {
   return options.max_hidden_frames > 0 && consecutive_hidden_frames > options.max_hidden_frames;
 }

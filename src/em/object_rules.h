@@ -139,6 +139,18 @@ Occlusion occlusion(const cv::Mat& rendered_depth, const cv::Mat& measured_depth
 /// was hidden (`was_hidden`) stays so until fewer than objects.visible_again_fraction are (never
 /// with hidden_fraction 0 or nothing rendered).
 bool isHidden(const Occlusion& occlusion, const ObjectOptions& options, bool was_hidden = false);
+/// Leaving the view (beyond the paper). `wide_ids` is the object's own ray cast over a view
+/// wider than the frame's (its pixels == object_id), `frame` the frame's rectangle in it:
+/// the fraction of its pixels inside `frame` (1 when nothing is rendered).
+double inViewFraction(const cv::Mat& wide_ids, int object_id, const cv::Rect& frame);
+/// Whether any pixel of the object's mask lies on the outermost rows or columns of the image:
+/// only then can part of it be outside.
+bool touchesImageEdge(const cv::Mat& object_ids, int object_id);
+/// Leaving: less than objects.leaving_fraction of the projection is in view; an object that was
+/// leaving (`was_leaving`) stays so until at least objects.in_view_again_fraction is (never with
+/// leaving_fraction 0).
+bool isLeaving(double in_view_fraction, const ObjectOptions& options, bool was_leaving = false);
+
 /// Objects hidden on more than objects.max_hidden_frames frames in a row are deleted.
 bool hiddenTooLong(int consecutive_hidden_frames, const ObjectOptions& options);
 

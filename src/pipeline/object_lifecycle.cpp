@@ -93,14 +93,15 @@ void SlamSystem::trackObjects(const std::vector<Eigen::Isometry3d>& T_oc_predict
   ScopedStage s(timer_, "track_objects");
   for (size_t k = 0; k < objects_.size(); ++k) {
     TrackedObject& o = objects_[k];
-    if (o.hidden) {
-      // Hidden behind nearer surfaces at the last check: held still in the world (its pose
-      // relative to the camera follows the camera), not integrated, not counted as lost.
+    if (o.hidden || o.leaving) {
+      // Hidden behind nearer surfaces or leaving the view at the last check: held still in the
+      // world (its pose relative to the camera follows the camera), not integrated, not
+      // counted as lost.
       o.state = ObjectState::kInvisible;
-      ++o.hidden_frames;
       o.last_motion = last_motion_;
-      logDebug("frame ", frames_, ": object ", o.id, " hidden: held (", o.hidden_frames,
-               " frames)");
+      if (o.hidden) ++o.hidden_frames;
+      logDebug("frame ", frames_, ": object ", o.id, o.hidden ? " hidden" : " leaving the view",
+               ": held (", o.hidden_frames, " frames hidden)");
       continue;
     }
     o.hidden_frames = 0;
@@ -430,19 +431,34 @@ void SlamSystem::checkVisibility(const cv::Mat& depth) {
                           std::to_string(opt.max_hidden_frames) + "), its pose is stale");
       continue;
     }
+    // Held this frame for leaving the view (not hidden): its visible part is still judged by
+    // its association below.
+    const bool held_leaving = o.state == ObjectState::kInvisible && o.leaving && !o.hidden;
     raycaster_.render({{o.volume.get(), o.id, 0.0f}}, visibility_k_, T_world_camera_);
     cv::Mat& ids = visibility_ids_;
     raycaster_.download(&visibility_depth_, nullptr, &ids);
     const em::Occlusion occ =
         em::occlusion(visibility_depth_, *measured, o.volume->spec().truncation_m,
                       config_.track.inlier_noise_per_m2, &hidden_mask_);
-    // Only an object tracked (or held) up to now becomes hidden: one whose tracking failed may
-    // have moved nearer than its stale pose, which looks the same; it stays lost.
-    o.hidden = em::isHidden(occ, opt, o.hidden) &&
-               (o.state == ObjectState::kTracked || o.state == ObjectState::kInvisible);
+    // Only an object tracked (or held) up to now becomes hidden or leaving: one whose tracking
+    // failed may have moved nearer than its stale pose, which looks the same; it stays lost.
+    const bool trusted = o.state == ObjectState::kTracked || o.state == ObjectState::kInvisible;
+    o.hidden = em::isHidden(occ, opt, o.hidden) && trusted;
     if (o.hidden) {
       logDebug("frame ", frames_, ": object ", o.id, " hidden: ", occ.hidden, " of ", occ.rendered,
                " px behind nearer surfaces", at);
+    }
+    double in_view = 1.0;
+    if (opt.leaving_fraction > 0.0 && em::touchesImageEdge(ids, o.id)) {
+      // Only an object cut by the image edge can be leaving: cast it alone over the wide view.
+      raycaster_.render({{o.volume.get(), o.id, 0.0f}}, wide_k_, T_world_camera_);
+      raycaster_.download(nullptr, nullptr, &wide_ids_);
+      in_view = em::inViewFraction(wide_ids_, o.id, wide_frame_);
+    }
+    o.leaving = em::isLeaving(in_view, opt, o.leaving) && trusted;
+    if (o.leaving) {
+      logDebug("frame ", frames_, ": object ", o.id, " leaving the view: ", in_view,
+               " of its projection inside the image");
     }
     if (em::isInvisible(ids, o.id, opt)) {
       const int visible = em::visiblePixels(ids, o.id, opt);
@@ -450,7 +466,9 @@ void SlamSystem::checkVisibility(const cv::Mat& depth) {
                           std::to_string(opt.invisible_min_px) + " px" + at);
       continue;
     }
-    if (o.hidden || o.state != ObjectState::kTracked || estep_ids_.size() <= 1) continue;
+    if (o.hidden || (o.state != ObjectState::kTracked && !held_leaving) || estep_ids_.size() <= 1) {
+      continue;
+    }
     // Mean association over the pixels where the object is in front (hidden ones say nothing).
     ids.setTo(-1, hidden_mask_);
     cv::Mat q = estep_.downloadQ(o.e_step_slot);

@@ -121,6 +121,17 @@ SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrins
   visibility_k_ =
       vis_width == frame_width ? intrinsics_ : intrinsics_.scaled(vis_width, vis_height);
   visibility_options_ = scaledPixelThresholds(config.objects, vis_width / 640.0);
+  // The leaving test's wide view: the frame at half its resolution in the middle of a cast of
+  // the frame's size (the ray caster's capacity), twice its field of view across.
+  const int inner_w = std::max(1, intrinsics_.width / 2),
+            inner_h = std::max(1, intrinsics_.height / 2);
+  wide_frame_ = cv::Rect((intrinsics_.width - inner_w) / 2, (intrinsics_.height - inner_h) / 2,
+                         inner_w, inner_h);
+  wide_k_ = intrinsics_.scaled(inner_w, inner_h);
+  wide_k_.cx += wide_frame_.x;
+  wide_k_.cy += wide_frame_.y;
+  wide_k_.width = intrinsics_.width;
+  wide_k_.height = intrinsics_.height;
   if (!config.detector.plugin.empty()) {
     scheduler_ = std::make_unique<DetectorScheduler>(config.detector, source_uri, intrinsics);
   }

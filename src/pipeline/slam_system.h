@@ -35,8 +35,9 @@ namespace emf::pipeline {
 enum class ObjectState {
   kTracked,    // tracked and integrated this frame
   kLost,       // tracking failed this frame: pose kept, not integrated
-  kInvisible,  // alive but hidden behind nearer surfaces (objects.hidden_fraction): not tracked,
-               // pose held still in the world, not integrated
+  kInvisible,  // alive but hidden behind nearer surfaces (objects.hidden_fraction) or leaving
+               // the view (objects.leaving_fraction): not tracked, pose held still in the world,
+               // not integrated
   kDeleted,    // deleted in this frame (reported once, then gone)
 };
 const char* objectStateName(ObjectState state);
@@ -100,6 +101,9 @@ struct TrackedObject {
   /// next frame holds it instead of tracking it. hidden_frames: consecutive frames held.
   bool hidden = false;
   int hidden_frames = 0;
+  /// Leaving the view in the last visibility check (objects.leaving_fraction): the next frame
+  /// holds it too, but it stays subject to the invisibility and association rules.
+  bool leaving = false;
   int pool_full_frames = 0;  // frames on which some of its blocks found no slot in the pool
   int e_step_slot = 0;       // index of this object in the current E-step (1..)
   /// Where the object claims pixels in the E-step (objects.claim_region), in its frame at
@@ -230,6 +234,9 @@ class SlamSystem {
   io::Intrinsics visibility_k_;
   em::ObjectOptions visibility_options_;
   cv::Mat visibility_depth_, visibility_ids_, hidden_mask_, visibility_measured_;
+  io::Intrinsics wide_k_;  // the leaving test's cast (objects.leaving_fraction)
+  cv::Rect wide_frame_;    // the frame's rectangle in it
+  cv::Mat wide_ids_;
   int next_object_id_ = 1;
   std::function<void(const TrackedObject&)> deletion_hook_;
   std::unique_ptr<DetectorScheduler> scheduler_;  // null without a detector plugin

@@ -413,6 +413,46 @@ TEST(ObjectRules, HiddenTooLongAfterMaxHiddenFrames) {
   EXPECT_FALSE(hiddenTooLong(100000, o));
 }
 
+TEST(ObjectRules, LeavingWhenMostOfTheProjectionIsOutsideTheImage) {
+  // A wide cast of 16x12 with the frame's rectangle 8x6 in its middle; the object (id 3) is a
+  // 6x4 patch straddling the frame's left edge: 2 of its 6 columns inside, 8 of 24 pixels.
+  const cv::Rect frame(4, 3, 8, 6);
+  cv::Mat wide(12, 16, CV_32S, cv::Scalar(-1));
+  wide(cv::Rect(0, 4, 6, 4)).setTo(3);
+  wide.at<int>(0, 0) = 5;  // another object: not counted
+  EXPECT_NEAR(inViewFraction(wide, 3, frame), 8.0 / 24.0, 1e-12);
+  EXPECT_NEAR(inViewFraction(wide, 7, frame), 1.0, 0.0);  // nothing rendered
+  wide(cv::Rect(0, 4, 6, 4)).setTo(-1);
+  wide(cv::Rect(5, 4, 6, 4)).setTo(3);  // inside the frame
+  EXPECT_NEAR(inViewFraction(wide, 3, frame), 1.0, 1e-12);
+
+  // The frame's own cast: only an object on its outermost rows or columns can be cut.
+  cv::Mat ids(6, 8, CV_32S, cv::Scalar(-1));
+  ids(cv::Rect(1, 1, 6, 4)).setTo(3);
+  EXPECT_FALSE(touchesImageEdge(ids, 3));
+  for (const cv::Point& edge :
+       {cv::Point(0, 2), cv::Point(7, 2), cv::Point(3, 0), cv::Point(3, 5)}) {
+    cv::Mat cut = ids.clone();
+    cut.at<int>(edge) = 3;
+    EXPECT_TRUE(touchesImageEdge(cut, 3)) << edge;
+    EXPECT_FALSE(touchesImageEdge(cut, 4)) << edge;
+  }
+
+  ObjectOptions o;
+  o.leaving_fraction = 0.5;
+  o.in_view_again_fraction = 0.6;
+  EXPECT_TRUE(isLeaving(0.49, o));
+  EXPECT_FALSE(isLeaving(0.5, o));
+  // Hysteresis: once leaving, until at least in_view_again_fraction is in view.
+  EXPECT_TRUE(isLeaving(0.55, o, true));
+  EXPECT_FALSE(isLeaving(0.6, o, true));
+  o.in_view_again_fraction = 0.3;  // never below leaving_fraction
+  EXPECT_TRUE(isLeaving(0.45, o, true));
+  o.leaving_fraction = 0.0;  // off (the paper)
+  EXPECT_FALSE(isLeaving(0.0, o));
+  EXPECT_FALSE(isLeaving(0.0, o, true));
+}
+
 TEST(ObjectRules, GrowthInWholeBlocks) {
   // 8 x 8 x 8 blocks of 8 voxels of 1 cm: the volume spans [0, 0.64) m per axis.
   const Eigen::Vector3i dims(8, 8, 8);

@@ -1,5 +1,5 @@
 // A small synthetic scene for pipeline tests of one object: a room (floor, walls and five static
-// pillars for the camera to track against) with a 20 cm box standing on the floor, plus the
+// pillars for the camera to track against) with a 40 cm box standing on the floor, plus the
 // box's exact silhouette as a detection and the SLAM options these tests share. The tests add
 // their own camera path and further objects.
 #pragma once
