@@ -24,8 +24,9 @@ struct RenderItem {
   const Volume* volume = nullptr;
   int id = 0;
   /// A hit of this volume replaces what earlier items rendered unless it is more than this far
-  /// behind it (metres of camera z). Render the background first with 0, then objects with
-  /// about a background voxel, so an object wins against the background's copy of its surface.
+  /// behind it (metres of camera z). Render the background first with 0, then objects with a
+  /// margin (objects.render_margin_m), so an object wins against the background's copy of its
+  /// surface.
   float depth_margin_m = 0.0f;
 };
 

@@ -216,7 +216,7 @@ void SlamSystem::matchDetections(const DetectionBatch& batch, FrameOutcome* out)
         if (it == batch.objects.end()) continue;
         o.volume->setPose(it->T_world_object);
       }
-      items.push_back({o.volume.get(), o.id, background_->spec().voxel_size_m});
+      items.push_back({o.volume.get(), o.id, static_cast<float>(config_.objects.render_margin_m)});
     }
     raycaster_.render(items, intrinsics_, batch.T_world_camera);
     raycaster_.download(nullptr, nullptr, &last_ids_);

@@ -331,7 +331,7 @@ std::vector<map::RenderItem> SlamSystem::renderItems() const {
     map::RenderItem it;
     it.volume = o.volume.get();
     it.id = o.id;
-    it.depth_margin_m = background_->spec().voxel_size_m;
+    it.depth_margin_m = static_cast<float>(config_.objects.render_margin_m);
     items.push_back(it);
   }
   return items;
