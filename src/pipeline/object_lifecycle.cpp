@@ -230,6 +230,18 @@ void SlamSystem::matchDetections(const DetectionBatch& batch, FrameOutcome* out)
     for (size_t k = 0; k < objects_.size(); ++k) iou[i][k] = em::maskIoU(det, object_masks[k]);
   }
   const std::vector<int> match = em::matchByIoU(iou, opt.match_iou);
+  for (size_t i = 0; i < usable.size(); ++i) {
+    DetectionMatch m;
+    m.class_name = usable[i]->class_name;
+    if (match[i] >= 0) m.object_id = objects_[static_cast<size_t>(match[i])].id;
+    for (size_t k = 0; k < objects_.size(); ++k) {
+      if (iou[i][k] > m.best_iou) {
+        m.best_iou = iou[i][k];
+        m.best_object = objects_[k].id;
+      }
+    }
+    out->matches.push_back(m);
+  }
   std::vector<bool> matched(objects_.size(), false);
   cv::Mat vertex;
   for (size_t i = 0; i < usable.size(); ++i) {

@@ -57,6 +57,14 @@ struct ObjectOutcome {
   std::string deleted_reason;               // set with kDeleted
 };
 
+/// How one detection of a frame was matched to the objects' ray-cast masks.
+struct DetectionMatch {
+  std::string class_name;
+  int object_id = -1;    // the object it was matched to, -1 none (a candidate for a new object)
+  int best_object = -1;  // the object whose mask overlaps it most, -1 none
+  double best_iou = 0;   // that overlap (IoU with the object's mask)
+};
+
 /// What process() did with one frame.
 struct FrameOutcome {
   int64_t index = 0;     // frames processed before this one
@@ -69,8 +77,9 @@ struct FrameOutcome {
   map::AllocationReport allocation;  // of the background integration (unset when lost)
   /// Objects alive after this frame, plus those deleted in it (state kDeleted), by id.
   std::vector<ObjectOutcome> objects;
-  bool detector_ran = false;  // detections were applied this frame
-  int detections = 0;         // detections used this frame
+  bool detector_ran = false;            // detections were applied this frame
+  int detections = 0;                   // detections used this frame
+  std::vector<DetectionMatch> matches;  // per detection used, in the detector's order
 };
 
 /// The preprocessing of the depth the E-step and the objects use (objects.filter_depth).
