@@ -103,7 +103,7 @@ struct ObjectOptions {
   /// edge) is held on the next frame like a hidden one: its pose held still in the world, not
   /// tracked or integrated. The sliver left in view does not fix the pose: it slides along the
   /// border (occlusion preset, 640x480: the suitcase 15-55 cm off on its last 6 frames in
-  /// view, 4-15 cm for a box in tests/pipeline/slam_visibility_test.cpp). Unlike a hidden
+  /// view; a turning box in tests/pipeline/slam_leaving_test.cpp 1.4-33 cm). Unlike a hidden
   /// object it is still deleted when invisible or by its mean association, so the model of a
   /// mover that left does not stay. 0 = off (the paper).
   double leaving_fraction = 0.5;
