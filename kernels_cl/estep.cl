@@ -27,13 +27,12 @@
 __kernel void estep_likelihood16(__global const float4* vertex, const int count, const float4 r0,
                                  const float4 r1, const float4 r2, __global const int* index,
                                  __global const int* count_index, const int has_counts,
-                                 const int4 dims, const float4 claim_lo,
-                                 const float4 claim_hi, __global const short2* voxels,
-                                 const float voxel_size, const float truncation, const float sigma,
-                                 const float alpha, const float p_uniform, const float min_weight,
-                                 const int pfg_mode, const int first, __global float* likelihood,
-                                 __global float* sum, __global float* best,
-                                 __global float* residual) {
+                                 const int4 dims, const float4 claim_lo, const float4 claim_hi,
+                                 __global const short2* voxels, const float voxel_size,
+                                 const float truncation, const float sigma, const float alpha,
+                                 const float p_uniform, const float min_weight, const int pfg_mode,
+                                 const int first, __global float* likelihood, __global float* sum,
+                                 __global float* best, __global float* residual) {
   const int base = get_global_id(0) * 16;
   if (base >= count) return;
   float16 px, py, pz, pw;
