@@ -10,7 +10,11 @@
 // ru_maxrss from wait4) and, for emf, the voxel-pool memory. Ends with one line per dataset:
 //   slam_bench data=<name> res=WxH voxel_m=.. emf_ate_cm=.. emf_ms=.. emf_p90_ms=.. emf_lost=..
 //              peer_ate_cm=.. peer_ms=.. speedup=..
-// (speedup = peer median / emf median; peer fields are "nan" with --no-peer).
+//              emf_vs_peer_ate_cm=.. gt_step_deg=.. emf_step_deg=.. peer_step_deg=..
+// (speedup = peer median / emf median; peer fields are "nan" with --no-peer). The last four tell
+// how far the ground truth itself is off: the ATE of emf against the peer, and each
+// trajectory's own rms rotation error per frame from the three-cornered hat of their pairwise
+// one-frame RPEs (io::threeCorneredHat).
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -301,6 +305,12 @@ struct SystemFigures {
   int lost = 0;
 };
 
+/// The estimates against each other (only with the peer): see io::threeCorneredHat.
+struct TruthCheck {
+  double emf_vs_peer_ate_cm = NAN;
+  double step_deg[3] = {NAN, NAN, NAN};  // own rotation error per frame: gt, emf, peer
+};
+
 std::string fmt(double v, int decimals = 2) {
   if (!std::isfinite(v)) return "nan";
   char b[64];
@@ -403,6 +413,7 @@ int main(int argc, char** argv) {
 
         // ---- peer ----
         SystemFigures p;
+        TruthCheck t;
         if (a.peer) {
           const int stride =
               a.peer_source_stride > 0 ? a.peer_source_stride : std::max(1, a.res.width / 160);
@@ -442,16 +453,44 @@ int main(int argc, char** argv) {
           std::printf("ratio: ATE emf/peer %s, speed peer/emf %s, peak RSS emf/peer %s\n",
                       fmt(e.ate_cm / p.ate_cm).c_str(), fmt(p.ms / e.ms).c_str(),
                       fmt(e.rss_mb / p.rss_mb).c_str());
+          if (est.size() >= 3 && pest.size() >= 3) {
+            // How much of the disagreement with the ground truth is the ground truth's own:
+            // the two estimates against each other, and the three-cornered hat of the three
+            // trajectories' one-frame steps (io::threeCorneredHat).
+            std::vector<double> steps;
+            for (size_t k = 1; k < est.size(); ++k) {
+              steps.push_back(est.stamps[k] - est.stamps[k - 1]);
+            }
+            const emf::io::ThreeCorneredHat h =
+                emf::io::threeCorneredHat(gt, est, pest, percentile(steps, 0.5));
+            t.emf_vs_peer_ate_cm = emf::io::computeAte(pest, est).trans_m.rmse * 100;
+            for (int i = 0; i < 3; ++i) t.step_deg[i] = h.rot_deg[i];
+            std::printf(
+                "truth: emf against peer ATE %s cm; one-frame RPE rms, rotation deg / translation "
+                "mm: emf-gt %s / %s, peer-gt %s / %s, emf-peer %s / %s\n"
+                "       own share per frame (three-cornered hat): gt %s / %s, emf %s / %s, peer "
+                "%s / %s\n",
+                fmt(t.emf_vs_peer_ate_cm, 3).c_str(), fmt(h.ab.rot_deg.rmse, 3).c_str(),
+                fmt(h.ab.trans_m.rmse * 1e3).c_str(), fmt(h.ac.rot_deg.rmse, 3).c_str(),
+                fmt(h.ac.trans_m.rmse * 1e3).c_str(), fmt(h.bc.rot_deg.rmse, 3).c_str(),
+                fmt(h.bc.trans_m.rmse * 1e3).c_str(), fmt(h.rot_deg[0], 3).c_str(),
+                fmt(h.trans_m[0] * 1e3).c_str(), fmt(h.rot_deg[1], 3).c_str(),
+                fmt(h.trans_m[1] * 1e3).c_str(), fmt(h.rot_deg[2], 3).c_str(),
+                fmt(h.trans_m[2] * 1e3).c_str());
+          }
         }
-        char line[512];
+        char line[768];
         std::snprintf(line, sizeof line,
                       "slam_bench data=%s res=%dx%d voxel_m=%.3f emf_ate_cm=%s emf_ms=%s "
                       "emf_p90_ms=%s emf_lost=%d emf_rss_mb=%.0f peer_ate_cm=%s peer_ms=%s "
-                      "peer_rss_mb=%s speedup=%s",
+                      "peer_rss_mb=%s speedup=%s emf_vs_peer_ate_cm=%s gt_step_deg=%s "
+                      "emf_step_deg=%s peer_step_deg=%s",
                       d.name.c_str(), a.res.width, a.res.height, a.res.voxel_m,
                       fmt(e.ate_cm, 3).c_str(), fmt(e.ms).c_str(), fmt(e.p90_ms).c_str(), e.lost,
                       e.rss_mb, fmt(p.ate_cm, 3).c_str(), fmt(p.ms).c_str(),
-                      fmt(p.rss_mb, 0).c_str(), fmt(p.ms / e.ms).c_str());
+                      fmt(p.rss_mb, 0).c_str(), fmt(p.ms / e.ms).c_str(),
+                      fmt(t.emf_vs_peer_ate_cm, 3).c_str(), fmt(t.step_deg[0], 3).c_str(),
+                      fmt(t.step_deg[1], 3).c_str(), fmt(t.step_deg[2], 3).c_str());
         lines.push_back(line);
       } catch (const std::exception& ex) {
         // One dataset failing (a broken folder, no ground truth) keeps the others' figures.

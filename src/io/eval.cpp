@@ -168,6 +168,26 @@ RpeResult computeRpe(const Trajectory& gt, const Trajectory& est, double delta_s
   return r;
 }
 
+ThreeCorneredHat threeCorneredHat(const Trajectory& a, const Trajectory& b, const Trajectory& c,
+                                  double delta_s) {
+  ThreeCorneredHat h;
+  h.ab = computeRpe(a, b, delta_s);
+  h.ac = computeRpe(a, c, delta_s);
+  h.bc = computeRpe(b, c, delta_s);
+  const auto share = [](double with_first, double with_second, double between_others) {
+    const double sq =
+        (with_first * with_first + with_second * with_second - between_others * between_others) / 2;
+    return std::sqrt(std::max(0.0, sq));
+  };
+  h.rot_deg[0] = share(h.ab.rot_deg.rmse, h.ac.rot_deg.rmse, h.bc.rot_deg.rmse);
+  h.rot_deg[1] = share(h.ab.rot_deg.rmse, h.bc.rot_deg.rmse, h.ac.rot_deg.rmse);
+  h.rot_deg[2] = share(h.ac.rot_deg.rmse, h.bc.rot_deg.rmse, h.ab.rot_deg.rmse);
+  h.trans_m[0] = share(h.ab.trans_m.rmse, h.ac.trans_m.rmse, h.bc.trans_m.rmse);
+  h.trans_m[1] = share(h.ab.trans_m.rmse, h.bc.trans_m.rmse, h.ac.trans_m.rmse);
+  h.trans_m[2] = share(h.ac.trans_m.rmse, h.bc.trans_m.rmse, h.ab.trans_m.rmse);
+  return h;
+}
+
 TrajectoryEval evaluateTrajectory(const std::string& name, const Trajectory& gt,
                                   const Trajectory& est, const EvalOptions& options) {
   TrajectoryEval e;

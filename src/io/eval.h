@@ -56,6 +56,22 @@ struct RpeResult {
 /// Throws InvalidArgument when fewer than 2 pairs remain.
 RpeResult computeRpe(const Trajectory& gt, const Trajectory& est, double delta_s = 1.0);
 
+/// The three-cornered hat (as three clocks are compared): three trajectories of the same motion,
+/// compared pairwise by their RPE over `delta_s`. When their errors per step are independent
+/// with rms a, b and c, the pairwise RPE rms are sqrt(a^2 + b^2), sqrt(a^2 + c^2) and
+/// sqrt(b^2 + c^2), so each trajectory's own share follows: a^2 = (ab^2 + ac^2 - bc^2) / 2, and
+/// so on. A share whose square comes out negative (correlated errors, or an exact trajectory
+/// with sampling noise in the others) is reported as 0. Used by bench/slam_bench to tell how
+/// much of the step error against a ground truth is the ground truth's own. Throws as
+/// computeRpe when a pair has too few poses.
+struct ThreeCorneredHat {
+  RpeResult ab, ac, bc;  // the pairwise RPEs (the first trajectory of each pair as reference)
+  double rot_deg[3] = {0, 0, 0};  // the own rms rotation error per step of a, b, c
+  double trans_m[3] = {0, 0, 0};  // the own rms translation error per step of a, b, c
+};
+ThreeCorneredHat threeCorneredHat(const Trajectory& a, const Trajectory& b, const Trajectory& c,
+                                  double delta_s);
+
 struct EvalOptions {
   double max_diff_s = 0.02;          // timestamp association, seconds
   double rpe_delta_s = 1.0;          // RPE time delta, seconds

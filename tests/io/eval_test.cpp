@@ -128,6 +128,53 @@ TEST(Eval, RpeOnConstantVelocityMotion) {
   EXPECT_LT(s.trans_m.max, kExactTolM);
 }
 
+// Three copies of one smooth motion, each with its own independent per-pose noise (a exact,
+// b and c with a rotation of sigma per axis and a translation of sigma_t per axis, drawn anew
+// for every pose): the one-step RPE between two copies has the rms of both their noises, and
+// the three-cornered hat recovers each copy's own. A per-pose noise of sigma per axis gives a
+// step error of sqrt(2 * 3) sigma (two poses, three axes).
+TEST(Eval, ThreeCorneredHatRecoversEachTrajectorysOwnStepError) {
+  const int n = 3000;
+  const double sigma_deg[3] = {0.0, 0.1, 0.2};
+  const double sigma_m[3] = {0.0, 0.002, 0.001};
+  std::mt19937 rng(7);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  Trajectory traj[3];
+  for (int k = 0; k < n; ++k) {
+    const double t = k / 30.0;
+    const Eigen::Isometry3d truth =
+        pose(Eigen::Vector3d(std::sin(0.3 * t), 0.2 * t, 0.1 * std::cos(0.5 * t)), 0.2 * t,
+             0.1 * std::sin(0.4 * t));
+    for (int i = 0; i < 3; ++i) {
+      const double s = sigma_deg[i] * M_PI / 180;
+      Eigen::Isometry3d noise = Eigen::Isometry3d::Identity();
+      const Eigen::Vector3d w(s * unit(rng), s * unit(rng), s * unit(rng));
+      if (w.norm() > 0) noise.linear() = Eigen::AngleAxisd(w.norm(), w.normalized()).matrix();
+      noise.translation() = sigma_m[i] * Eigen::Vector3d(unit(rng), unit(rng), unit(rng));
+      traj[i].append(t, truth * noise);
+    }
+  }
+  const ThreeCorneredHat h = threeCorneredHat(traj[0], traj[1], traj[2], 1.0 / 30);
+  EXPECT_EQ(h.ab.pairs, static_cast<size_t>(n - 2));
+  // 3000 steps: the rms of each pairwise RPE is within ~2 % of its expectation, and the exact
+  // copy's share comes out of differences of such figures.
+  constexpr double kShareRelTol = 0.05;
+  constexpr double kExactShareTolDeg = 0.05;
+  constexpr double kExactShareTolM = 0.0006;
+  EXPECT_LT(h.rot_deg[0], kExactShareTolDeg);
+  EXPECT_LT(h.trans_m[0], kExactShareTolM);
+  for (int i = 1; i < 3; ++i) {
+    SCOPED_TRACE(i);
+    const double want_deg = std::sqrt(6.0) * sigma_deg[i];
+    EXPECT_NEAR(h.rot_deg[i], want_deg, kShareRelTol * want_deg);
+    const double want_m = std::sqrt(6.0) * sigma_m[i];
+    EXPECT_NEAR(h.trans_m[i], want_m, kShareRelTol * want_m);
+  }
+  // The pairwise figures themselves: b against c carries both their noises.
+  const double bc_deg = std::sqrt(6.0) * std::hypot(sigma_deg[1], sigma_deg[2]);
+  EXPECT_NEAR(h.bc.rot_deg.rmse, bc_deg, kShareRelTol * bc_deg);
+}
+
 TEST(Eval, StatsFollowNumpy) {
   const ErrorStats s = errorStats({4, 1, 3, 2});
   EXPECT_DOUBLE_EQ(s.median, 2.5);
