@@ -318,6 +318,45 @@ std::string fmt(double v, int decimals = 2) {
   return b;
 }
 
+/// How much of the disagreement with the ground truth is the ground truth's own: the two
+/// estimates against each other, and the three-cornered hat of the three trajectories' steps
+/// (io::threeCorneredHat) over one frame and over one second. Prints the `truth:` lines. The
+/// hat assumes independent errors: an error two trajectories share (the peer's ICP and a ground
+/// truth from ICP tracking, say) is given to the third.
+TruthCheck truthCheck(const emf::io::Trajectory& gt, const emf::io::Trajectory& est,
+                      const emf::io::Trajectory& peer) {
+  TruthCheck t;
+  try {
+    t.emf_vs_peer_ate_cm = emf::io::computeAte(peer, est).trans_m.rmse * 100;
+    std::printf("truth: emf against peer ATE %s cm; RPE rms, rotation deg / translation mm\n",
+                fmt(t.emf_vs_peer_ate_cm, 3).c_str());
+    std::vector<double> steps;  // the ground truth has a pose per frame (prepareFrames)
+    for (size_t k = 1; k < gt.size(); ++k) steps.push_back(gt.stamps[k] - gt.stamps[k - 1]);
+    const double frame_s = percentile(steps, 0.5);
+    for (const double delta_s : {frame_s, 1.0}) {
+      const emf::io::ThreeCorneredHat h = emf::io::threeCorneredHat(gt, est, peer, delta_s);
+      if (delta_s == frame_s) {
+        for (int i = 0; i < 3; ++i) t.step_deg[i] = h.rot_deg[i];
+      }
+      const auto pair = [](const emf::io::RpeResult& r) {
+        return fmt(r.rot_deg.rmse, 3) + " / " + fmt(r.trans_m.rmse * 1e3);
+      };
+      const auto own = [&h](int i) {
+        return fmt(h.rot_deg[i], 3) + " / " + fmt(h.trans_m[i] * 1e3);
+      };
+      std::printf(
+          "       over %s s (%zu poses common): emf-gt %s, peer-gt %s, emf-peer %s; own share "
+          "(three-cornered hat): gt %s, emf %s, peer %s\n",
+          fmt(delta_s, 3).c_str(), h.common_poses, pair(h.ab).c_str(), pair(h.ac).c_str(),
+          pair(h.bc).c_str(), own(0).c_str(), own(1).c_str(), own(2).c_str());
+    }
+  } catch (const emf::InvalidArgument& ex) {
+    // Too few poses in common (emf lost most frames): the check has nothing to say.
+    std::printf("truth: not computed: %s\n", ex.what());
+  }
+  return t;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -453,39 +492,7 @@ int main(int argc, char** argv) {
           std::printf("ratio: ATE emf/peer %s, speed peer/emf %s, peak RSS emf/peer %s\n",
                       fmt(e.ate_cm / p.ate_cm).c_str(), fmt(p.ms / e.ms).c_str(),
                       fmt(e.rss_mb / p.rss_mb).c_str());
-          if (est.size() >= 3 && pest.size() >= 3) {
-            // How much of the disagreement with the ground truth is the ground truth's own: the
-            // two estimates against each other, and the three-cornered hat of the three
-            // trajectories' steps (io::threeCorneredHat) over one frame and over one second.
-            // The hat assumes independent errors: an error two trajectories share (the peer's
-            // ICP and a ground truth from ICP tracking, say) is given to the third.
-            t.emf_vs_peer_ate_cm = emf::io::computeAte(pest, est).trans_m.rmse * 100;
-            std::printf(
-                "truth: emf against peer ATE %s cm; RPE rms, rotation deg / translation "
-                "mm\n",
-                fmt(t.emf_vs_peer_ate_cm, 3).c_str());
-            std::vector<double> steps;
-            for (size_t k = 1; k < est.size(); ++k)
-              steps.push_back(est.stamps[k] - est.stamps[k - 1]);
-            const double frame_s = percentile(steps, 0.5);
-            for (const double delta_s : {frame_s, 1.0}) {
-              const emf::io::ThreeCorneredHat h = emf::io::threeCorneredHat(gt, est, pest, delta_s);
-              if (delta_s == frame_s) {
-                for (int i = 0; i < 3; ++i) t.step_deg[i] = h.rot_deg[i];
-              }
-              const auto pair = [](const emf::io::RpeResult& r) {
-                return fmt(r.rot_deg.rmse, 3) + " / " + fmt(r.trans_m.rmse * 1e3);
-              };
-              const auto own = [&h](int i) {
-                return fmt(h.rot_deg[i], 3) + " / " + fmt(h.trans_m[i] * 1e3);
-              };
-              std::printf(
-                  "       over %s s: emf-gt %s, peer-gt %s, emf-peer %s; own share (three-cornered "
-                  "hat): gt %s, emf %s, peer %s\n",
-                  fmt(delta_s, 3).c_str(), pair(h.ab).c_str(), pair(h.ac).c_str(),
-                  pair(h.bc).c_str(), own(0).c_str(), own(1).c_str(), own(2).c_str());
-            }
-          }
+          t = truthCheck(gt, est, pest);
         }
         char line[768];
         std::snprintf(line, sizeof line,

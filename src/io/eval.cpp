@@ -123,6 +123,23 @@ double medianOf(std::vector<double> v) {
 
 }  // namespace
 
+namespace {
+
+/// The relative pose error of one pair as evaluate_rpe.py computes it: translation norm
+/// (metres) and rotation angle (degrees) of (E_i^-1 E_j)^-1 (G_i^-1 G_j), appended.
+void addRelativeError(const Eigen::Isometry3d& est_i, const Eigen::Isometry3d& est_j,
+                      const Eigen::Isometry3d& gt_i, const Eigen::Isometry3d& gt_j,
+                      std::vector<double>* trans, std::vector<double>* rot) {
+  const Eigen::Isometry3d est_rel = est_j.inverse() * est_i;
+  const Eigen::Isometry3d gt_rel = gt_j.inverse() * gt_i;
+  const Eigen::Isometry3d error = est_rel.inverse() * gt_rel;
+  trans->push_back(error.translation().norm());
+  const double c = std::min(1.0, std::max(-1.0, (error.linear().trace() - 1.0) / 2.0));
+  rot->push_back(std::acos(c) * kDegPerRad);
+}
+
+}  // namespace
+
 RpeResult computeRpe(const Trajectory& gt, const Trajectory& est, double delta_s) {
   if (gt.size() < 2 || est.size() < 2) {
     throw InvalidArgument("RPE needs at least 2 poses in each trajectory ('" + gt.source +
@@ -148,12 +165,7 @@ RpeResult computeRpe(const Trajectory& gt, const Trajectory& est, double delta_s
         std::abs(stamps_gt[g1] - stamps_est[j]) > gt_max_time_difference) {
       continue;
     }
-    const Eigen::Isometry3d est_rel = est.poses[j].inverse() * est.poses[i];
-    const Eigen::Isometry3d gt_rel = gt.poses[g1].inverse() * gt.poses[g0];
-    const Eigen::Isometry3d error = est_rel.inverse() * gt_rel;
-    trans.push_back(error.translation().norm());
-    const double c = std::min(1.0, std::max(-1.0, (error.linear().trace() - 1.0) / 2.0));
-    rot.push_back(std::acos(c) * kDegPerRad);
+    addRelativeError(est.poses[i], est.poses[j], gt.poses[g0], gt.poses[g1], &trans, &rot);
   }
   if (trans.size() < 2) {
     throw InvalidArgument("RPE: only " + std::to_string(trans.size()) + " pose pairs " +
@@ -169,11 +181,51 @@ RpeResult computeRpe(const Trajectory& gt, const Trajectory& est, double delta_s
 }
 
 ThreeCorneredHat threeCorneredHat(const Trajectory& a, const Trajectory& b, const Trajectory& c,
-                                  double delta_s) {
+                                  double delta_s, double max_diff_s) {
+  // The poses all three have (a and b associated, then b's matched stamps with c), so that
+  // the three RPEs compare the same pose pairs.
+  const std::vector<StampMatch> ab = associateStamps(a.stamps, b.stamps, max_diff_s);
+  std::vector<double> b_matched;
+  for (const StampMatch& m : ab) b_matched.push_back(b.stamps[m.second]);
+  const std::vector<StampMatch> bc = associateStamps(b_matched, c.stamps, max_diff_s);
+  Trajectory common[3];
+  for (int i = 0; i < 3; ++i) common[i].source = (i == 0 ? a : i == 1 ? b : c).source;
+  for (const StampMatch& m : bc) {
+    const StampMatch& first = ab[m.first];
+    common[0].append(a.stamps[first.first], a.poses[first.first]);
+    common[1].append(b.stamps[first.second], b.poses[first.second]);
+    common[2].append(c.stamps[m.second], c.poses[m.second]);
+  }
+  // Pairs (i, j) of common poses, j > i the one closest to t_i + delta_s (a gap in the
+  // common poses stretches a step; evaluate_rpe.py's closest index may be i itself there).
+  std::vector<std::pair<size_t, size_t>> pairs;
+  const std::vector<double>& t = common[1].stamps;
+  for (size_t i = 0; i + 1 < t.size(); ++i) {
+    const size_t j = std::max(i + 1, findClosestIndex(t, t[i] + delta_s));
+    pairs.emplace_back(i, j);
+  }
+  if (pairs.size() < 2) {
+    throw InvalidArgument("three-cornered hat: only " + std::to_string(common[0].size()) +
+                          " poses are common to '" + a.source + "', '" + b.source + "' and '" +
+                          c.source + "'; need at least 3");
+  }
+  const auto rpe = [&](const Trajectory& ref, const Trajectory& est) {
+    std::vector<double> trans, rot;
+    for (const auto& [i, j] : pairs) {
+      addRelativeError(est.poses[i], est.poses[j], ref.poses[i], ref.poses[j], &trans, &rot);
+    }
+    RpeResult r;
+    r.pairs = pairs.size();
+    r.delta_s = delta_s;
+    r.trans_m = errorStats(trans);
+    r.rot_deg = errorStats(rot);
+    return r;
+  };
   ThreeCorneredHat h;
-  h.ab = computeRpe(a, b, delta_s);
-  h.ac = computeRpe(a, c, delta_s);
-  h.bc = computeRpe(b, c, delta_s);
+  h.common_poses = common[0].size();
+  h.ab = rpe(common[0], common[1]);
+  h.ac = rpe(common[0], common[2]);
+  h.bc = rpe(common[1], common[2]);
   const auto share = [](double with_first, double with_second, double between_others) {
     const double sq =
         (with_first * with_first + with_second * with_second - between_others * between_others) / 2;

@@ -62,15 +62,19 @@ RpeResult computeRpe(const Trajectory& gt, const Trajectory& est, double delta_s
 /// sqrt(b^2 + c^2), so each trajectory's own share follows: a^2 = (ab^2 + ac^2 - bc^2) / 2, and
 /// so on. A share whose square comes out negative (correlated errors, or an exact trajectory
 /// with sampling noise in the others) is reported as 0. Used by bench/slam_bench to tell how
-/// much of the step error against a ground truth is the ground truth's own. Throws as
-/// computeRpe when a pair has too few poses.
+/// much of the step error against a ground truth is the ground truth's own. Only the poses
+/// all three have (associated within `max_diff_s`) are compared, and the three RPEs use the
+/// same pose pairs: for each common pose i, the next common pose j > i closest in time to
+/// t_i + delta_s (a tracker that lost frames has gaps, which stretch a step). Throws
+/// InvalidArgument when fewer than 3 poses are common.
 struct ThreeCorneredHat {
-  RpeResult ab, ac, bc;  // the pairwise RPEs (the first trajectory of each pair as reference)
+  size_t common_poses = 0;  // poses that a, b and c all have
+  RpeResult ab, ac, bc;     // the pairwise RPEs (the first trajectory of each pair as reference)
   double rot_deg[3] = {0, 0, 0};  // the own rms rotation error per step of a, b, c
   double trans_m[3] = {0, 0, 0};  // the own rms translation error per step of a, b, c
 };
 ThreeCorneredHat threeCorneredHat(const Trajectory& a, const Trajectory& b, const Trajectory& c,
-                                  double delta_s);
+                                  double delta_s, double max_diff_s = 0.02);
 
 struct EvalOptions {
   double max_diff_s = 0.02;          // timestamp association, seconds

@@ -155,7 +155,7 @@ TEST(Eval, ThreeCorneredHatRecoversEachTrajectorysOwnStepError) {
     }
   }
   const ThreeCorneredHat h = threeCorneredHat(traj[0], traj[1], traj[2], 1.0 / 30);
-  EXPECT_EQ(h.ab.pairs, static_cast<size_t>(n - 2));
+  EXPECT_EQ(h.ab.pairs, static_cast<size_t>(n - 1));  // every pose and the next one
   // 3000 steps: the rms of each pairwise RPE is within ~2 % of its expectation, and the exact
   // copy's share comes out of differences of such figures.
   constexpr double kShareRelTol = 0.05;
@@ -173,6 +173,24 @@ TEST(Eval, ThreeCorneredHatRecoversEachTrajectorysOwnStepError) {
   // The pairwise figures themselves: b against c carries both their noises.
   const double bc_deg = std::sqrt(6.0) * std::hypot(sigma_deg[1], sigma_deg[2]);
   EXPECT_NEAR(h.bc.rot_deg.rmse, bc_deg, kShareRelTol * bc_deg);
+
+  // b lost a stretch of frames and c every third one: only the poses all three have are
+  // compared (same pairs in all three RPEs), and the shares stay where they were.
+  Trajectory b_gaps, c_gaps;
+  for (size_t k = 0; k < traj[1].size(); ++k) {
+    if (k < 1000 || k >= 1500) b_gaps.append(traj[1].stamps[k], traj[1].poses[k]);
+    if (k % 3 != 0) c_gaps.append(traj[2].stamps[k], traj[2].poses[k]);
+  }
+  const ThreeCorneredHat g = threeCorneredHat(traj[0], b_gaps, c_gaps, 1.0 / 30);
+  // b keeps 2500 poses; c drops the multiples of 3 among them: 334 below 1000, 500 from 1500.
+  EXPECT_EQ(g.common_poses, static_cast<size_t>(2500 - 334 - 500));
+  EXPECT_EQ(g.ab.pairs, g.ac.pairs);
+  EXPECT_EQ(g.ab.pairs, g.bc.pairs);
+  EXPECT_LT(g.rot_deg[0], kExactShareTolDeg);
+  for (int i = 1; i < 3; ++i) {
+    SCOPED_TRACE(i);
+    EXPECT_NEAR(g.rot_deg[i], h.rot_deg[i], kShareRelTol * h.rot_deg[i]);
+  }
 }
 
 TEST(Eval, StatsFollowNumpy) {
