@@ -8,6 +8,7 @@
 #include <map>
 #include <numeric>
 #include <regex>
+#include <utility>
 
 #include "common/error.h"
 
@@ -138,6 +139,15 @@ void addRelativeError(const Eigen::Isometry3d& est_i, const Eigen::Isometry3d& e
   rot->push_back(std::acos(c) * kDegPerRad);
 }
 
+RpeResult rpeResult(std::vector<double> trans, std::vector<double> rot, double delta_s) {
+  RpeResult r;
+  r.pairs = trans.size();
+  r.delta_s = delta_s;
+  r.trans_m = errorStats(std::move(trans));
+  r.rot_deg = errorStats(std::move(rot));
+  return r;
+}
+
 }  // namespace
 
 RpeResult computeRpe(const Trajectory& gt, const Trajectory& est, double delta_s) {
@@ -172,12 +182,7 @@ RpeResult computeRpe(const Trajectory& gt, const Trajectory& est, double delta_s
                           std::to_string(delta_s) + " s apart in '" + est.source +
                           "' have ground truth in '" + gt.source + "'; need at least 2");
   }
-  RpeResult r;
-  r.pairs = trans.size();
-  r.delta_s = delta_s;
-  r.trans_m = errorStats(trans);
-  r.rot_deg = errorStats(rot);
-  return r;
+  return rpeResult(trans, rot, delta_s);
 }
 
 ThreeCorneredHat threeCorneredHat(const Trajectory& a, const Trajectory& b, const Trajectory& c,
@@ -214,12 +219,7 @@ ThreeCorneredHat threeCorneredHat(const Trajectory& a, const Trajectory& b, cons
     for (const auto& [i, j] : pairs) {
       addRelativeError(est.poses[i], est.poses[j], ref.poses[i], ref.poses[j], &trans, &rot);
     }
-    RpeResult r;
-    r.pairs = pairs.size();
-    r.delta_s = delta_s;
-    r.trans_m = errorStats(trans);
-    r.rot_deg = errorStats(rot);
-    return r;
+    return rpeResult(trans, rot, delta_s);
   };
   ThreeCorneredHat h;
   h.common_poses = common[0].size();
