@@ -319,6 +319,37 @@ Occlusion occlusion(const cv::Mat& rendered_depth, const cv::Mat& measured_depth
   return occ;
 }
 
+int uncoverStaleBackground(cv::Mat* ids, const cv::Mat& depth, const cv::Mat& object_ids,
+                           const cv::Mat& object_depth, const cv::Mat& measured_depth,
+                           double margin_m, double margin_per_m2) {
+  CV_Assert(ids != nullptr && ids->type() == CV_32S && object_ids.type() == CV_32S &&
+            depth.type() == CV_32F && object_depth.type() == CV_32F &&
+            measured_depth.type() == CV_32F && ids->size() == depth.size() &&
+            ids->size() == object_ids.size() && ids->size() == object_depth.size() &&
+            ids->size() == measured_depth.size());
+  int uncovered = 0;
+  for (int v = 0; v < ids->rows; ++v) {
+    int* id = ids->ptr<int>(v);
+    const float* bg = depth.ptr<float>(v);
+    const int* oid = object_ids.ptr<int>(v);
+    const float* oz = object_depth.ptr<float>(v);
+    const float* m = measured_depth.ptr<float>(v);
+    for (int u = 0; u < ids->cols; ++u) {
+      if (id[u] != 0 || oid[u] <= 0 || !std::isfinite(m[u]) || !(m[u] > 0.0f) ||
+          !std::isfinite(bg[u]) || !std::isfinite(oz[u])) {
+        continue;
+      }
+      const double z = m[u];
+      const double margin = margin_m + margin_per_m2 * z * z;
+      if (z > bg[u] + margin && std::abs(z - oz[u]) <= margin) {
+        id[u] = oid[u];
+        ++uncovered;
+      }
+    }
+  }
+  return uncovered;
+}
+
 bool isHidden(const Occlusion& occlusion, const ObjectOptions& options, bool was_hidden) {
   if (options.hidden_fraction <= 0.0 || occlusion.rendered == 0) return false;
   const double threshold = was_hidden

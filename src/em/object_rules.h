@@ -135,6 +135,20 @@ struct Occlusion {
 };
 Occlusion occlusion(const cv::Mat& rendered_depth, const cv::Mat& measured_depth, double margin_m,
                     double margin_per_m2, cv::Mat* hidden_mask = nullptr);
+/// Object masks where the background's surface is stale (beyond the paper). `ids` / `depth` are
+/// the ray cast of the background (id 0) and the objects, in which the background wins unless
+/// an object lies within objects.render_margin_m behind it; `object_ids` / `object_depth` the
+/// ray cast of the objects alone (-1 / NaN = none); `measured_depth` the frame's depth (NaN
+/// invalid); all CV_32S / CV_32F of one size. A pixel the background took goes to the object
+/// behind it when the measurement sees through the background's surface (measured > background
+/// + margin) and lies on the object's surface (|measured - object| <= margin), margin =
+/// margin_m + margin_per_m2 z^2 at the measured z. The background keeps a copy of a still
+/// object's surface (it fuses those pixels with q_0 ~0.5); once the object moves away from the
+/// camera, that copy hid it from its own detections. Returns the number of pixels given back.
+int uncoverStaleBackground(cv::Mat* ids, const cv::Mat& depth, const cv::Mat& object_ids,
+                           const cv::Mat& object_depth, const cv::Mat& measured_depth,
+                           double margin_m, double margin_per_m2);
+
 /// Hidden: at least objects.hidden_fraction of the rendered pixels are hidden; an object that
 /// was hidden (`was_hidden`) stays so until fewer than objects.visible_again_fraction are (never
 /// with hidden_fraction 0 or nothing rendered).

@@ -203,6 +203,7 @@ void SlamSystem::matchDetections(const DetectionBatch& batch, FrameOutcome* out)
   // on: the current ones, or for a late (async) result the poses it carries; objects created
   // after that frame are not matched.
   last_ids_ = cv::Mat(intrinsics_.height, intrinsics_.width, CV_32S, cv::Scalar(-1));
+  cv::Mat vertex;  // the frame's vertex map, downloaded once when needed
   const bool late = batch.frames_late > 0;
   std::vector<Eigen::Isometry3d> current_poses;
   if (!objects_.empty()) {
@@ -218,8 +219,34 @@ void SlamSystem::matchDetections(const DetectionBatch& batch, FrameOutcome* out)
       }
       items.push_back({o.volume.get(), o.id, static_cast<float>(config_.objects.render_margin_m)});
     }
+    // The frame's depth shows where the background's surface is stale (only for the frame the
+    // detector ran on: a late result's frame is gone).
+    const bool measured = opt.mask_measured_depth && !late;
+    cv::Mat object_depth, object_ids;
+    if (measured && items.size() > 1) {
+      raycaster_.render(std::vector<map::RenderItem>(items.begin() + 1, items.end()), intrinsics_,
+                        batch.T_world_camera);
+      raycaster_.download(&object_depth, nullptr, &object_ids);
+    }
     raycaster_.render(items, intrinsics_, batch.T_world_camera);
-    raycaster_.download(nullptr, nullptr, &last_ids_);
+    cv::Mat depth;
+    raycaster_.download(measured ? &depth : nullptr, nullptr, &last_ids_);
+    if (!object_ids.empty()) {
+      if (vertex.empty()) vertex = downloadVertexMap();
+      cv::Mat measured_depth(vertex.size(), CV_32F);
+      for (int v = 0; v < vertex.rows; ++v) {
+        const cv::Vec4f* p = vertex.ptr<cv::Vec4f>(v);
+        float* z = measured_depth.ptr<float>(v);
+        for (int u = 0; u < vertex.cols; ++u) z[u] = p[u][3] > 0.0f ? p[u][2] : NAN;
+      }
+      const int uncovered =
+          em::uncoverStaleBackground(&last_ids_, depth, object_ids, object_depth, measured_depth,
+                                     opt.render_margin_m, config_.track.inlier_noise_per_m2);
+      if (uncovered > 0) {
+        logDebug("frame ", frames_, ": ", uncovered,
+                 " mask pixels where the depth sees through the background onto an object");
+      }
+    }
     for (size_t k = 0; k < objects_.size(); ++k) objects_[k].volume->setPose(current_poses[k]);
   }
   std::vector<std::vector<double>> iou(usable.size(), std::vector<double>(objects_.size(), 0.0));
@@ -243,7 +270,6 @@ void SlamSystem::matchDetections(const DetectionBatch& batch, FrameOutcome* out)
     out->matches.push_back(m);
   }
   std::vector<bool> matched(objects_.size(), false);
-  cv::Mat vertex;
   for (size_t i = 0; i < usable.size(); ++i) {
     const io::Detection& d = *usable[i];
     if (match[i] < 0) {

@@ -404,6 +404,49 @@ TEST(ObjectRules, OcclusionCountsRenderedPixelsBehindNearerMeasurements) {
   EXPECT_FALSE(isHidden(Occlusion{}, o));  // nothing rendered
 }
 
+TEST(ObjectRules, StaleBackgroundGivesPixelsBackWhereTheDepthSeesThroughIt) {
+  // The background's copy of a chair's old surface at 2.4 m covers a 4x3 patch (id 0); the
+  // chair (id 3) now stands 0.2 m behind it. Margin 0.05 m + 0.005 z^2 = 0.0788 m at 2.6 m.
+  cv::Mat ids(5, 8, CV_32S, cv::Scalar(-1));
+  cv::Mat depth(5, 8, CV_32F, cv::Scalar(NAN));
+  ids(cv::Rect(2, 1, 4, 3)).setTo(0);
+  depth(cv::Rect(2, 1, 4, 3)).setTo(2.4f);
+  cv::Mat object_ids(5, 8, CV_32S, cv::Scalar(-1));
+  cv::Mat object_depth(5, 8, CV_32F, cv::Scalar(NAN));
+  object_ids(cv::Rect(2, 1, 4, 3)).setTo(3);
+  object_depth(cv::Rect(2, 1, 4, 3)).setTo(2.6f);
+  cv::Mat measured(5, 8, CV_32F, cv::Scalar(2.6f));
+  measured.at<float>(1, 2) = 2.4f;   // the background is really there: kept
+  measured.at<float>(1, 3) = 2.45f;  // within the margin of the background: kept
+  measured.at<float>(1, 4) = 3.2f;   // through the background, but not on the chair: kept
+  measured.at<float>(1, 5) = NAN;    // no measurement: kept
+  measured.at<float>(2, 2) = 2.53f;  // 0.07 m off the chair, within the margin: the chair's
+  const cv::Mat before = ids.clone();
+  cv::Mat out = ids.clone();
+  EXPECT_EQ(uncoverStaleBackground(&out, depth, object_ids, object_depth, measured, 0.05, 0.005),
+            8);
+  for (int v = 0; v < 5; ++v) {
+    for (int u = 0; u < 8; ++u) {
+      const bool given = v >= 2 && v <= 3 && u >= 2 && u <= 5;
+      EXPECT_EQ(out.at<int>(v, u), given ? 3 : before.at<int>(v, u)) << u << "," << v;
+    }
+  }
+  // A pixel already the object's, or with no object behind the background, is left alone.
+  out = ids.clone();
+  out.at<int>(2, 2) = 3;
+  object_ids.at<int>(3, 5) = -1;
+  object_depth.at<float>(3, 5) = NAN;
+  EXPECT_EQ(uncoverStaleBackground(&out, depth, object_ids, object_depth, measured, 0.05, 0.005),
+            6);
+  EXPECT_EQ(out.at<int>(3, 5), 0);
+  // Without the depth-dependent part the margin is 5 cm: 2.53 m is 7 cm off the chair.
+  object_ids.at<int>(3, 5) = 3;
+  object_depth.at<float>(3, 5) = 2.6f;
+  out = ids.clone();
+  EXPECT_EQ(uncoverStaleBackground(&out, depth, object_ids, object_depth, measured, 0.05, 0.0), 7);
+  EXPECT_EQ(out.at<int>(2, 2), 0);
+}
+
 TEST(ObjectRules, HiddenTooLongAfterMaxHiddenFrames) {
   ObjectOptions o;
   o.max_hidden_frames = 300;
