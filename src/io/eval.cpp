@@ -122,10 +122,6 @@ double medianOf(std::vector<double> v) {
   return v.size() % 2 ? v[mid] : 0.5 * (v[mid - 1] + v[mid]);
 }
 
-}  // namespace
-
-namespace {
-
 /// The relative pose error of one pair as evaluate_rpe.py computes it: translation norm
 /// (metres) and rotation angle (degrees) of (E_i^-1 E_j)^-1 (G_i^-1 G_j), appended.
 void addRelativeError(const Eigen::Isometry3d& est_i, const Eigen::Isometry3d& est_j,
@@ -182,7 +178,7 @@ RpeResult computeRpe(const Trajectory& gt, const Trajectory& est, double delta_s
                           std::to_string(delta_s) + " s apart in '" + est.source +
                           "' have ground truth in '" + gt.source + "'; need at least 2");
   }
-  return rpeResult(trans, rot, delta_s);
+  return rpeResult(std::move(trans), std::move(rot), delta_s);
 }
 
 ThreeCorneredHat threeCorneredHat(const Trajectory& a, const Trajectory& b, const Trajectory& c,
@@ -219,7 +215,7 @@ ThreeCorneredHat threeCorneredHat(const Trajectory& a, const Trajectory& b, cons
     for (const auto& [i, j] : pairs) {
       addRelativeError(est.poses[i], est.poses[j], ref.poses[i], ref.poses[j], &trans, &rot);
     }
-    return rpeResult(trans, rot, delta_s);
+    return rpeResult(std::move(trans), std::move(rot), delta_s);
   };
   ThreeCorneredHat h;
   h.common_poses = common[0].size();
