@@ -102,14 +102,16 @@ MatchRun runScene(double render_margin_m, bool measured_depth = true,
   return run;
 }
 
+void printRun(const char* name, const MatchRun& r) {
+  std::printf("%s: %d objects created, %d later detections matched, lowest IoU %.3f\n", name,
+              r.objects_created, r.later_detections, r.min_iou);
+}
+
 TEST(SlamMatch, AStillObjectsMaskWinsAgainstTheBackgroundsCopyOfIt) {
   const MatchRun wide = runScene(Config{}.objects.render_margin_m);
   const MatchRun voxel = runScene(kBackgroundVoxelM);
-  for (const auto& [name, r] : {std::pair<const char*, const MatchRun&>{"default margin", wide},
-                                {"one-voxel margin", voxel}}) {
-    std::printf("%s: %d objects created, %d later detections matched, lowest IoU %.3f\n", name,
-                r.objects_created, r.later_detections, r.min_iou);
-  }
+  printRun("default margin", wide);
+  printRun("one-voxel margin", voxel);
   EXPECT_EQ(wide.objects_created, 1);
   EXPECT_EQ(wide.later_detections, (kFrames - 1) / kDetectEvery);
   EXPECT_GE(wide.min_iou, kMinIoU);
@@ -120,12 +122,8 @@ TEST(SlamMatch, AnObjectThatMovedBehindTheBackgroundsCopyOfItIsStillMatched) {
   const io::synth::Scene scene = movedAwayBoxScene();
   const MatchRun with = runScene(Config{}.objects.render_margin_m, true, scene);
   const MatchRun without = runScene(Config{}.objects.render_margin_m, false, scene);
-  for (const auto& [name, r] :
-       {std::pair<const char*, const MatchRun&>{"with the frame's depth", with},
-        {"the map alone", without}}) {
-    std::printf("%s: %d objects created, %d later detections matched, lowest IoU %.3f\n", name,
-                r.objects_created, r.later_detections, r.min_iou);
-  }
+  printRun("with the frame's depth", with);
+  printRun("the map alone", without);
   EXPECT_EQ(with.objects_created, 1);
   EXPECT_EQ(with.later_detections, (kMovedAwayFrames - 1) / kDetectEvery);
   EXPECT_GE(with.min_iou, kMovedMinIoU);
