@@ -12,12 +12,25 @@
 //
 //   track_bias --data DIR [--track-data DIR2] [--frames N] [--reverse] [--depth-scale S]
 //              [--set SECTION.KEY=VALUE]... [--per-frame] [--decompose] [--prefuse]
-//              [--start-at-gt]
+//              [--start-at-gt] [--object K] [--fuse-tracked]
 //
 // Two controls: --prefuse fuses every frame first and then tracks each against the finished
 // map (a map that already holds the views ahead of the camera; the frame's own view is in it
 // too), and --start-at-gt starts each frame's tracking at its ground truth instead of the
 // prediction (a deviation that stays is where the cost has its minimum, not slow convergence).
+//
+// --object K tracks object K of a synthetic source (--data synth:<preset>?frames=N&...) instead
+// of the camera: each frame keeps only the object's rendered pixels (exact instance ids), its
+// ground truth is the camera pose in the object's frame, the volume is placed and truncated as
+// the pipeline places a new object (from the first frame's points), and the objects' depth
+// filter and tracking options apply. With a perfect history and exact association, the per-frame
+// error is what the frames themselves allow the object tracker (the floor under emf's object
+// ATE); frames where the object covers fewer than objects.invisible_min_px (scaled to the image)
+// pixels are neither tracked nor fused.
+//
+// --fuse-tracked gives up the perfect history: every frame after the first two is fused at its
+// tracked pose (the prediction when lost) and predicted from the two previous such poses, as
+// the pipeline does; the gap to the default run is what the history's drift costs.
 //
 // --set overrides a configuration default (e.g. preprocess.hole_margin_px=1). --decompose adds,
 // per pixel class (next to a hole on the background or foreground side of an edge, or inside a
@@ -32,6 +45,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
@@ -40,6 +54,8 @@
 #include "cl/context.h"
 #include "common/config.h"
 #include "common/error.h"
+#include "em/object_rules.h"
+#include "io/eval.h"
 #include "io/frame_source.h"
 #include "map/device_image.h"
 #include "map/volume.h"
@@ -57,16 +73,19 @@ struct Args {
   bool reverse = false;
   bool per_frame = false;
   bool decompose = false;
-  bool prefuse = false;      // fuse every frame first, then track each against the finished map
-  bool start_at_gt = false;  // start tracking at the ground truth, not the prediction
-  double depth_scale = 0.0;  // 0: the source's default
+  bool prefuse = false;       // fuse every frame first, then track each against the finished map
+  bool start_at_gt = false;   // start tracking at the ground truth, not the prediction
+  int object = 0;             // > 0: track this object of a synth: source, not the camera
+  bool fuse_tracked = false;  // fuse each frame at its tracked pose, predict from those
+  double depth_scale = 0.0;   // 0: the source's default
   std::vector<std::string> sets;  // section.key=value overrides of the defaults
 };
 
 const char* const kUsage =
     "usage: track_bias --data DIR [--track-data DIR2] [--frames N] [--reverse] [--depth-scale S]\n"
     "                  [--set SECTION.KEY=VALUE]... [--per-frame] [--decompose] [--prefuse]\n"
-    "                  [--start-at-gt]\n";
+    "                  [--start-at-gt] [--object K] [--fuse-tracked]\n"
+    "  DIR: a TUM folder, or synth:<preset>[?frames=N&seed=S&width=W&height=H] (--object)\n";
 
 Args parse(int argc, char** argv) {
   Args a;
@@ -85,6 +104,10 @@ Args parse(int argc, char** argv) {
       a.prefuse = true;
     } else if (args.is("--start-at-gt")) {
       a.start_at_gt = true;
+    } else if (args.is("--fuse-tracked")) {
+      a.fuse_tracked = true;
+    } else if (args.is("--object")) {
+      a.object = static_cast<int>(args.integer(1, 65535));
     } else if (args.is("--data")) {
       a.data = args.value();
     } else if (args.is("--track-data")) {
@@ -101,6 +124,9 @@ Args parse(int argc, char** argv) {
   }
   if (a.data.empty()) {
     throw emf::bench::UsageError("--data DIR is required (a TUM folder with groundtruth.txt)");
+  }
+  if (a.fuse_tracked && (a.prefuse || a.start_at_gt)) {
+    throw emf::bench::UsageError("--fuse-tracked excludes --prefuse and --start-at-gt");
   }
   return a;
 }
@@ -161,6 +187,59 @@ cv::Mat classify(const cv::Mat& depth) {
   return classes;
 }
 
+/// --object: `kept` gets only object `id`'s pixels of `f` (NaN elsewhere; no depth at all when
+/// fewer than `min_px` have a measurement) and, as its ground truth, the camera pose in the
+/// object's frame.
+void keepObjectOnly(const emf::io::Frame& f, int id, const std::string& data, int min_px,
+                    emf::io::Frame* kept) {
+  const auto pose = f.T_world_object_gt.find(id);
+  if (f.instance_ids.empty() || pose == f.T_world_object_gt.end()) {
+    throw emf::IoError(data + ": frame " + std::to_string(f.index) +
+                       " has no ground truth for object " + std::to_string(id) +
+                       " (--object needs a synth: source with that object)");
+  }
+  kept->T_world_camera_gt = pose->second.inverse() * *f.T_world_camera_gt;
+  cv::Mat others;
+  cv::compare(f.instance_ids, cv::Scalar(id), others, cv::CMP_NE);
+  kept->depth.setTo(std::numeric_limits<float>::quiet_NaN(), others);
+  cv::Mat measured;
+  cv::compare(kept->depth, kept->depth, measured, cv::CMP_EQ);  // false for NaN
+  if (cv::countNonZero(measured) < min_px) kept->depth = cv::Mat();
+}
+
+/// --object: the volume the pipeline would create for the object from the first frame that
+/// shows it (its points in the object's frame, which is the "world" of these frames).
+void placeObjectVolume(const std::vector<emf::io::Frame>& frames, const emf::io::Intrinsics& k,
+                       const emf::Config& config, emf::map::VolumeSpec* spec,
+                       Eigen::Isometry3d* T_world_volume) {
+  const auto first = std::find_if(frames.begin(), frames.end(),
+                                  [](const emf::io::Frame& f) { return !f.depth.empty(); });
+  if (first == frames.end()) throw emf::IoError("--object: the object is in no frame");
+  std::vector<Eigen::Vector3d> points;
+  for (int v = 0; v < first->depth.rows; ++v) {
+    for (int u = 0; u < first->depth.cols; ++u) {
+      const double z = first->depth.at<float>(v, u);
+      if (!(z > 0.0)) continue;
+      const Eigen::Vector3d p((u - k.cx) / k.fx * z, (v - k.cy) / k.fy * z, z);
+      points.push_back(*first->T_world_camera_gt * p);
+    }
+  }
+  const emf::em::VolumePlacement placement = emf::em::placeObject(points, config.objects);
+  if (placement.extent_m <= 0.0) throw emf::IoError("--object: fewer than 10 object points");
+  *spec = emf::map::VolumeSpec::object(config.map, placement.resolution,
+                                       static_cast<float>(placement.voxel_size_m));
+  spec->free_space_full_weight = config.objects.free_space_full_weight;
+  const double centre_depth_m = (first->T_world_camera_gt->inverse() * placement.centre_world).z();
+  spec->truncation_m = static_cast<float>(emf::em::objectTruncation(
+      config.objects, config.map.truncation_voxels, placement.voxel_size_m, centre_depth_m / k.fx));
+  *T_world_volume = Eigen::Isometry3d::Identity();
+  T_world_volume->translation() =
+      placement.centre_world - Eigen::Vector3d::Constant(spec->extentM().x() / 2.0);
+  std::printf("object volume: %d^3 voxels of %.2f cm, truncation %.2f cm (from frame %lld)\n",
+              placement.resolution, placement.voxel_size_m * 100.0, spec->truncation_m * 100.0,
+              static_cast<long long>(first->index));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -176,9 +255,14 @@ int main(int argc, char** argv) {
     emf::Config config;
     if (args.depth_scale > 0) config.source.depth_scale = args.depth_scale;
     for (const auto& assignment : args.sets) config.set(assignment);
+    // Set once the first frame's size is known (objects.invisible_min_px is for 640x480).
+    int min_object_px = 0;
     const auto load = [&](const std::string& dir, emf::io::Intrinsics* k) {
-      auto source = emf::io::openSource("tum:" + dir, config.source);
+      const bool is_uri = dir.rfind("synth:", 0) == 0;
+      auto source = emf::io::openSource(is_uri ? dir : "tum:" + dir, config.source);
       *k = source->intrinsics();
+      const double scale = k->width / 640.0;
+      min_object_px = static_cast<int>(config.objects.invisible_min_px * scale * scale);
       std::vector<emf::io::Frame> frames;
       emf::io::Frame f;
       while ((args.frames <= 0 || static_cast<int>(frames.size()) < args.frames) &&
@@ -193,6 +277,7 @@ int main(int argc, char** argv) {
         kept.timestamp = f.timestamp;
         kept.depth = f.depth.clone();
         kept.T_world_camera_gt = f.T_world_camera_gt;
+        if (args.object > 0) keepObjectOnly(f, args.object, dir, min_object_px, &kept);
         frames.push_back(std::move(kept));
       }
       if (frames.size() < 3) throw emf::IoError(dir + ": fewer than 3 frames");
@@ -220,38 +305,58 @@ int main(int argc, char** argv) {
 
     emf::cl::Context ctx{config.cl};
     emf::map::VoxelPool pool(ctx, config.map);
-    const emf::map::VolumeSpec spec = emf::map::VolumeSpec::background(config.map);
-    const Eigen::Isometry3d T_wv =
+    emf::map::VolumeSpec spec = emf::map::VolumeSpec::background(config.map);
+    Eigen::Isometry3d T_wv =
         emf::map::backgroundVolumePose(config.map, spec, *frames.front().T_world_camera_gt);
+    if (args.object > 0) placeObjectVolume(frames, k, config, &spec, &T_wv);
     emf::map::Volume volume(pool, spec, T_wv);
-    emf::track::Preprocessor pre(ctx, config.preprocess, k);
-    emf::track::Tracker tracker(ctx, config.track, k.width, k.height);
+    const emf::track::TrackOptions track_options =
+        args.object > 0 ? emf::pipeline::objectTrackOptions(config, k.width) : config.track;
+    emf::track::Preprocessor pre(
+        ctx, args.object > 0 ? emf::pipeline::objectPreprocessOptions(config) : config.preprocess,
+        k);
+    emf::track::Tracker tracker(ctx, track_options, k.width, k.height);
 
     Stats stats;
     int lost = 0;
+    // The tracked frames' poses and ground truth, for an ATE as `emf eval` computes it.
+    emf::io::Trajectory gt_track, est_track;
     // --decompose: per pixel class, the first-order pose shift -H^-1 g_class at the ground truth
     // (H of all pixels), i.e. what each class contributes to the deviation.
     emf::map::DeviceImage q_image(ctx, k.width, k.height);
     std::vector<Stats> class_stats(kClasses);
+    // The pose each frame is fused at: its ground truth, or with --fuse-tracked its tracked pose.
+    std::vector<Eigen::Isometry3d> fused_at;
+    for (const auto& f : frames) fused_at.push_back(*f.T_world_camera_gt);
     const auto fuse = [&](size_t i) {
+      if (frames[i].depth.empty()) return;  // --object: not in view
       if (!tracked_frames.empty() || args.prefuse) pre.process(frames[i].depth);
       emf::map::IntegrationInput in;
       in.depth = &pre.inputDepth();
       in.intrinsics = k;
-      in.T_world_camera = *frames[i].T_world_camera_gt;
+      in.T_world_camera = fused_at[i];
       volume.fuse(in);
     };
     if (args.prefuse) {
       for (size_t i = 0; i < frames.size(); ++i) fuse(i);
     }
     for (size_t i = 0; i < frames.size(); ++i) {
+      if (args.fuse_tracked && i >= 2) {  // until tracked: the constant-velocity prediction
+        fused_at[i] = fused_at[i - 1] * (fused_at[i - 2].inverse() * fused_at[i - 1]);
+      }
+      if (track_frames[i].depth.empty()) {  // --object: not in view
+        fuse(i);
+        continue;
+      }
       pre.process(track_frames[i].depth);
       const Eigen::Isometry3d& G = *frames[i].T_world_camera_gt;
       if (i >= 2) {
         const Eigen::Isometry3d& G1 = *frames[i - 1].T_world_camera_gt;
         const Eigen::Isometry3d& G2 = *frames[i - 2].T_world_camera_gt;
         const Eigen::Isometry3d predicted =
-            args.start_at_gt ? G : Eigen::Isometry3d(G1 * (G2.inverse() * G1));
+            args.start_at_gt
+                ? G
+                : (args.fuse_tracked ? fused_at[i] : Eigen::Isometry3d(G1 * (G2.inverse() * G1)));
         const emf::track::TrackResult r =
             tracker.track(emf::pipeline::deviceView(volume), pre.vertexMap().get(), nullptr,
                           T_wv.inverse() * predicted);
@@ -259,6 +364,9 @@ int main(int argc, char** argv) {
           ++lost;
         } else {
           const Eigen::Isometry3d d = G.inverse() * (T_wv * r.T_volume_camera);
+          if (args.fuse_tracked) fused_at[i] = T_wv * r.T_volume_camera;
+          gt_track.append(static_cast<double>(i), G);
+          est_track.append(static_cast<double>(i), T_wv * r.T_volume_camera);
           const Eigen::Isometry3d m = G1.inverse() * G;
           Eigen::Matrix<double, 9, 1> v;
           v << d.translation() * 1000.0, rotationDeg(d.rotation()), m.translation() * 1000.0;
@@ -266,7 +374,7 @@ int main(int argc, char** argv) {
           if (args.decompose) {
             const Eigen::Isometry3d T_gt = T_wv.inverse() * G;
             const cv::Mat classes = classify(frames[i].depth);
-            const int stride = config.track.pixel_stride;
+            const int stride = track_options.pixel_stride;
             const emf::track::NormalEquations all = tracker.evaluate(
                 emf::pipeline::deviceView(volume), pre.vertexMap().get(), nullptr, T_gt, stride);
             for (int c = 0; c < kClasses; ++c) {
@@ -321,12 +429,20 @@ int main(int argc, char** argv) {
     }
     std::printf("  ground-truth motion per frame (mm, camera frame): %+.3f %+.3f %+.3f\n",
                 stats.mean(6), stats.mean(7), stats.mean(8));
+    // The deviation's length, i.e. the camera position's error (with --object: in the object's
+    // frame, as `emf eval` scores objects, but without an alignment and with a perfect history).
+    const double rms_mm = std::sqrt((stats.sq[0] + stats.sq[1] + stats.sq[2]) / stats.n);
+    const double rms_deg = std::sqrt((stats.sq[3] + stats.sq[4] + stats.sq[5]) / stats.n);
+    const double ate_mm =
+        stats.n >= 3 ? emf::io::computeAte(gt_track, est_track, 0.5).trans_m.rmse * 1000.0 : NAN;
+    std::printf("  per-frame error rms: %.3f mm, %.4f deg; ATE (rigidly aligned) %.3f mm\n", rms_mm,
+                rms_deg, ate_mm);
     std::printf(
-        "track_bias data=%s frames=%d reverse=%d bias_mm=%.3f,%.3f,%.3f bias_deg=%.4f,%.4f,%.4f "
-        "motion_mm=%.3f,%.3f,%.3f\n",
-        args.data.c_str(), static_cast<int>(frames.size()), args.reverse ? 1 : 0, stats.mean(0),
-        stats.mean(1), stats.mean(2), stats.mean(3), stats.mean(4), stats.mean(5), stats.mean(6),
-        stats.mean(7), stats.mean(8));
+        "track_bias data=%s frames=%d reverse=%d object=%d bias_mm=%.3f,%.3f,%.3f "
+        "bias_deg=%.4f,%.4f,%.4f motion_mm=%.3f,%.3f,%.3f rms_mm=%.3f rms_deg=%.4f ate_mm=%.3f\n",
+        args.data.c_str(), static_cast<int>(frames.size()), args.reverse ? 1 : 0, args.object,
+        stats.mean(0), stats.mean(1), stats.mean(2), stats.mean(3), stats.mean(4), stats.mean(5),
+        stats.mean(6), stats.mean(7), stats.mean(8), rms_mm, rms_deg, ate_mm);
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "track_bias: " << e.what() << "\n";

@@ -108,6 +108,8 @@ TEST(BenchPrograms, BadArgumentsStopWithExitCode2AndNameTheOption) {
       {"track_bias", "--frames 1.5 --data x", "--frames '1.5': expected an integer in [0"},
       {"track_bias", "--depth-scale big", "--depth-scale 'big': expected a number in [0"},
       {"track_bias", "--reverse", "--data DIR is required"},
+      {"track_bias", "--object 0 --data x", "--object '0': expected an integer in [1, 65535]"},
+      {"track_bias", "--data x --fuse-tracked --prefuse", "--fuse-tracked excludes --prefuse"},
       {"slam_bench", "--frames 1", "--frames '1': expected an integer in [2, 100000]"},
       {"slam_bench", "--res 1024", "--res '1024': use 640 (640x480@1cm) or 320"},
       {"slam_bench", "--peer-stride 0", "--peer-stride '0': expected an integer in [1, 64]"},
