@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -42,6 +43,12 @@ std::string presetList() {
   return s;
 }
 
+std::string joinNames(const std::vector<std::string>& names) {
+  std::string s;
+  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
+  return s;
+}
+
 std::string partList() {
   std::string s;
   for (const auto& n : io::synth::noisePartNames()) s += (s.empty() ? "" : ", ") + n;
@@ -52,14 +59,15 @@ std::string partList() {
 
 int cmdSynth(const std::vector<std::string>& args) {
   std::string preset, out, frames, seed, width, height, det_every, threads, noise_without;
+  std::string movers, still, camera, motions;
   bool no_noise = false, force = false;
   ArgParser p("synth",
               "Renders a synthetic dynamic scene and writes it as a TUM RGB-D folder: rgb/, "
               "depth/ (uint16, 5000 per metre), rgb.txt, depth.txt, associations.txt, "
               "groundtruth.txt, calibration.txt, objects/gt-object-<k>-{camera,world}.txt and "
               "simulated detections in masks/ (see the folder's README.md). Presets: " +
-                  presetList() + ".");
-  p.positional("preset", &preset, "scene preset: " + presetList());
+                  presetList() + "; 'random' generates a different scene for every --seed.");
+  p.positional("preset", &preset, "scene preset (" + presetList() + ") or random");
   p.option("out", &out, "DIR", "output folder (created; must be empty unless --force)");
   p.option("frames", &frames, "N", "number of frames (default: the preset's)");
   p.option("seed", &seed, "S", "seed of depth/colour noise and detections (default 1)");
@@ -69,6 +77,15 @@ int cmdSynth(const std::vector<std::string>& args) {
            "run the simulated detector every N frames (default "
            "30, 0 = never)");
   p.option("threads", &threads, "N", "rendering threads (default: all cores)");
+  p.option("movers", &movers, "N", "random only: moving objects, 1-4 (default: from the seed)");
+  p.option("still", &still, "N",
+           "random only: still detected objects, 0-3 (default: from the seed)");
+  p.option("camera", &camera, "NAME",
+           "random only: camera family, " + joinNames(io::synth::cameraFamilyNames()) +
+               " (default: from the seed)");
+  p.option("motions", &motions, "LIST",
+           "random only: motion families the movers are drawn from, comma-separated: " +
+               joinNames(io::synth::motionFamilyNames()) + " (default: all)");
   p.flag("no-noise", &no_noise, "exact depth and colour (no sensor noise)");
   p.option("noise-without", &noise_without, "LIST",
            "switch these parts of the depth noise model off (comma-separated: " + partList() +
@@ -82,9 +99,18 @@ int cmdSynth(const std::vector<std::string>& args) {
     return kExitUsage;
   }
   const auto names = io::synth::presetNames();
-  if (std::find(names.begin(), names.end(), preset) == names.end()) {
-    std::fprintf(stderr, "emf synth: unknown preset '%s': valid presets are %s\n", preset.c_str(),
-                 presetList().c_str());
+  const bool random = preset == "random";
+  if (!random && std::find(names.begin(), names.end(), preset) == names.end()) {
+    std::fprintf(stderr,
+                 "emf synth: unknown preset '%s': valid presets are %s, and random (a generated "
+                 "scene per --seed)\n",
+                 preset.c_str(), presetList().c_str());
+    return kExitUsage;
+  }
+  if (!random && !(movers.empty() && still.empty() && camera.empty() && motions.empty())) {
+    std::fprintf(stderr,
+                 "emf synth: --movers, --still, --camera and --motions are for the generated "
+                 "scenes only (emf synth random ...)\n");
     return kExitUsage;
   }
 
@@ -114,6 +140,36 @@ int cmdSynth(const std::vector<std::string>& args) {
   if (!threads.empty()) {
     if (!parseFlag(p, "threads", threads, 0, 64, &v)) return kExitUsage;
     o.threads = static_cast<int>(v);
+  }
+  if (!movers.empty()) {
+    if (!parseFlag(p, "movers", movers, 1, 4, &v)) return kExitUsage;
+    o.random.movers = static_cast<int>(v);
+  }
+  if (!still.empty()) {
+    if (!parseFlag(p, "still", still, 0, 3, &v)) return kExitUsage;
+    o.random.still = static_cast<int>(v);
+  }
+  if (!camera.empty()) {
+    const auto& cams = io::synth::cameraFamilyNames();
+    if (std::find(cams.begin(), cams.end(), camera) == cams.end()) {
+      std::fprintf(stderr, "emf synth: --camera %s: valid camera families are %s\n", camera.c_str(),
+                   joinNames(cams).c_str());
+      return kExitUsage;
+    }
+    o.random.camera = camera;
+  }
+  if (!motions.empty()) {
+    std::stringstream list(motions);
+    std::string m;
+    const auto& fams = io::synth::motionFamilyNames();
+    while (std::getline(list, m, ',')) {
+      if (std::find(fams.begin(), fams.end(), m) == fams.end()) {
+        std::fprintf(stderr, "emf synth: --motions %s: unknown family '%s': valid ones are %s\n",
+                     motions.c_str(), m.c_str(), joinNames(fams).c_str());
+        return kExitUsage;
+      }
+      o.random.motions.push_back(m);
+    }
   }
   o.noise = !no_noise;
   if (!noise_without.empty()) {
@@ -153,20 +209,26 @@ int cmdSynth(const std::vector<std::string>& args) {
   }
 
   io::synth::SynthSource source(o);
-  std::string command = "emf synth " + preset + " --frames " + std::to_string(source.size()) +
-                        " --seed " + std::to_string(o.seed) + " --width " +
-                        std::to_string(o.width) + " --height " + std::to_string(o.height) +
-                        " --det-every " + std::to_string(o.detector.every_n_frames) +
-                        (o.noise ? "" : " --no-noise") +
-                        (noise_without.empty() ? "" : " --noise-without " + noise_without);
+  std::string command =
+      "emf synth " + preset + " --frames " + std::to_string(source.size()) + " --seed " +
+      std::to_string(o.seed) + " --width " + std::to_string(o.width) + " --height " +
+      std::to_string(o.height) + " --det-every " + std::to_string(o.detector.every_n_frames) +
+      (o.noise ? "" : " --no-noise") +
+      (noise_without.empty() ? "" : " --noise-without " + noise_without) +
+      (movers.empty() ? "" : " --movers " + movers) + (still.empty() ? "" : " --still " + still) +
+      (camera.empty() ? "" : " --camera " + camera) +
+      (motions.empty() ? "" : " --motions " + motions);
+  const io::synth::DetectorSimOptions& det = source.detector();
   io::TumWriterOptions wo;
   wo.readme_about =
       "Synthetic sequence `" + preset + "` made by emf " + std::to_string(EMF_VERSION_MAJOR) + "." +
       std::to_string(EMF_VERSION_MINOR) + "." + std::to_string(EMF_VERSION_PATCH) +
       " with\n\n    " + command + "\n\n" + source.scene().description + "\n\nSeed " +
       std::to_string(o.seed) +
-      " drives the sensor and detector simulation only (geometry and motion are the same for "
-      "every seed). " +
+      (random ? " chose the scene (room, furniture, objects, motions, camera) and drives the "
+                "sensor and detector simulation. "
+              : " drives the sensor and detector simulation only (geometry and motion are the "
+                "same for every seed). ") +
       (o.noise ? "Depth has Kinect-like noise: axial sigma 0.0012 + 0.0019 (z - 0.4)^2 m "
                  "(plus an incidence-angle term), 1/8 px disparity quantisation (f 525 px, "
                  "baseline 0.075 m), dropped and jittered pixels at depth discontinuities, "
@@ -175,17 +237,30 @@ int cmdSynth(const std::vector<std::string>& args) {
                : "Depth and colour are exact (no sensor noise).") +
       (noise_without.empty() ? ""
                              : " Parts of the depth noise switched off: " + noise_without + ".") +
-      (o.detector.every_n_frames > 0
-           ? " The simulated detector ran every " + std::to_string(o.detector.every_n_frames) +
-                 " frames (frames 0, " + std::to_string(o.detector.every_n_frames) +
-                 ", ...): masks with perturbed boundaries, about 10 % of visible objects "
-                 "missed, occasional false positives, scores in [0.5, 1], shuffled ids."
+      (det.every_n_frames > 0
+           ? " The simulated detector ran every " + std::to_string(det.every_n_frames) +
+                 " frames (frames 0, " + std::to_string(det.every_n_frames) +
+                 ", ...): masks with boundaries moved by up to " +
+                 std::to_string(det.max_boundary_px) + " px and shifted by up to " +
+                 std::to_string(det.max_shift_px) + " px (at 640 px), " +
+                 std::to_string(static_cast<int>(std::lround(100 * det.miss_rate))) +
+                 " % of visible objects missed, a false positive on " +
+                 std::to_string(static_cast<int>(std::lround(100 * det.false_positive_rate))) +
+                 " % of detection frames, classes confused " +
+                 std::to_string(static_cast<int>(std::lround(100 * det.confusion_rate))) +
+                 " %, gross spills " +
+                 std::to_string(static_cast<int>(std::lround(100 * det.spill_rate))) +
+                 " %, partial masks " +
+                 std::to_string(static_cast<int>(std::lround(100 * det.partial_rate))) +
+                 " %, results " + std::to_string(det.late_frames) +
+                 " frame(s) late; scores in [0.5, 1], shuffled ids."
            : " No detections were simulated.") +
       "\n\nObject ids: " +
       [&] {
         std::string s;
         for (const auto& obj : source.scene().objects) {
-          s += (s.empty() ? "" : ", ") + std::to_string(obj.id) + " = " + obj.class_name;
+          s += (s.empty() ? "" : ", ") + std::to_string(obj.id) + " = " + obj.class_name +
+               (obj.motion.empty() ? "" : " (" + obj.motion + ")");
         }
         return s.empty() ? std::string("none (static scene)") : s;
       }() +

@@ -129,3 +129,56 @@ TEST(SynthDetector, DetectionFrames) {
 
 }  // namespace
 }  // namespace emf::io::synth
+
+namespace emf::io::synth {
+namespace {
+
+// The gross flaws of the generated scenes' detector: each at rate 1 shows on every detection,
+// at rate 0 the detections are those of the presets' detector.
+TEST(SynthDetector, GrossFlawsAtTheirRates) {
+  const cv::Mat ids = threeObjects();
+  const std::map<int, std::string> classes = {{1, "suitcase"}, {2, "sports ball"}, {5, "car"}};
+  DetectorSimOptions plain;
+  plain.miss_rate = 0;
+  plain.false_positive_rate = 0;
+  DetectorSimOptions flawed = plain;
+  flawed.confusion_rate = 1.0;
+  for (int64_t f = 0; f < 20; ++f) {
+    std::vector<int> objects;
+    const auto a = simulateDetections(ids, classes, 3, f, plain, &objects);
+    const auto b = simulateDetections(ids, classes, 3, f, flawed);
+    ASSERT_EQ(a.size(), b.size());
+    for (size_t i = 0; i < a.size(); ++i) {
+      EXPECT_EQ(b[i].class_name, confusedClass(classes.at(objects[i])));
+      EXPECT_EQ(cv::countNonZero(a[i].mask != b[i].mask), 0);  // the masks are untouched
+    }
+  }
+  EXPECT_EQ(confusedClass("car"), "truck");
+  EXPECT_EQ(confusedClass("toaster"), "toaster");
+  DetectorSimOptions spill = plain, partial = plain;
+  spill.spill_rate = 1.0;
+  partial.partial_rate = 1.0;
+  for (int64_t f = 0; f < 20; ++f) {
+    std::vector<int> objects;
+    const auto a = simulateDetections(ids, classes, 3, f, plain, &objects);
+    const auto s = simulateDetections(ids, classes, 3, f, spill);
+    const auto p = simulateDetections(ids, classes, 3, f, partial);
+    ASSERT_EQ(a.size(), s.size());
+    ASSERT_EQ(a.size(), p.size());
+    for (size_t i = 0; i < a.size(); ++i) {
+      const double area = cv::countNonZero(a[i].mask);
+      const cv::Rect box = cv::boundingRect(a[i].mask > 0.5f);
+      // Spilled: dilated by at least 6 % of the box's larger side all around.
+      const double r = 0.06 * std::max(box.width, box.height);
+      EXPECT_GT(cv::countNonZero(s[i].mask), area + 2.0 * r * (box.width + box.height) * 0.6);
+      EXPECT_EQ(cv::countNonZero((a[i].mask > 0.5f) & (s[i].mask < 0.5f)), 0);
+      // Partial: 50-80 % of the mask kept, nothing added.
+      EXPECT_GE(cv::countNonZero(p[i].mask), 0.48 * area);
+      EXPECT_LE(cv::countNonZero(p[i].mask), 0.82 * area);
+      EXPECT_EQ(cv::countNonZero((p[i].mask > 0.5f) & (a[i].mask < 0.5f)), 0);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace emf::io::synth

@@ -11,6 +11,9 @@ namespace emf::io::synth {
 namespace {
 
 constexpr uint64_t kDetectorStream = 0x646574656374ull;  // "detect"
+// The imperfections added after the presets (confusion, spills, partial masks) draw from a
+// stream of their own per object, so the presets' detections stay as they were.
+constexpr uint64_t kFlawStream = 0x666c617773ull;  // "flaws"
 
 struct Candidate {
   int object_id;
@@ -59,7 +62,56 @@ cv::Mat perturbMask(const cv::Mat& mask, Rng& rng, const DetectorSimOptions& o, 
   return m;
 }
 
+/// The gross flaws of one object's mask: a spill or a partial cut.
+cv::Mat grossFlaws(cv::Mat mask, Rng& rng, const DetectorSimOptions& o) {
+  const bool spill = rng.bernoulli(o.spill_rate);
+  const bool partial = rng.bernoulli(o.partial_rate);
+  const double spill_fraction = rng.uniform(0.06, 0.12);
+  const double angle = rng.uniform(0.0, 6.283185307179586);
+  const double keep = rng.uniform(0.5, 0.8);
+  const cv::Rect box = cv::boundingRect(mask);
+  if (box.area() == 0) return mask;
+  if (spill) {
+    const int r = std::max(1, static_cast<int>(spill_fraction * std::max(box.width, box.height)));
+    cv::dilate(mask, mask, cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * r + 1, 2 * r + 1}));
+  }
+  if (partial) {
+    // Keep the pixels on one side of a line across the box, at the `keep` quantile of their
+    // projections on its normal.
+    const double nx = std::cos(angle), ny = std::sin(angle);
+    std::vector<double> proj;
+    for (int v = box.y; v < box.y + box.height; ++v) {
+      const uint8_t* m = mask.ptr<uint8_t>(v);
+      for (int u = box.x; u < box.x + box.width; ++u) {
+        if (m[u]) proj.push_back(u * nx + v * ny);
+      }
+    }
+    if (proj.empty()) return mask;
+    const size_t k = static_cast<size_t>(keep * (proj.size() - 1));
+    std::nth_element(proj.begin(), proj.begin() + static_cast<std::ptrdiff_t>(k), proj.end());
+    const double cut = proj[k];
+    for (int v = 0; v < mask.rows; ++v) {
+      uint8_t* m = mask.ptr<uint8_t>(v);
+      for (int u = 0; u < mask.cols; ++u) {
+        if (m[u] && u * nx + v * ny > cut) m[u] = 0;
+      }
+    }
+  }
+  return mask;
+}
+
 }  // namespace
+
+std::string confusedClass(const std::string& c) {
+  static const std::map<std::string, std::string> kConfusions = {
+      {"car", "truck"},      {"teddy bear", "dog"},     {"cup", "bowl"},
+      {"bottle", "vase"},    {"vase", "bottle"},        {"book", "laptop"},
+      {"laptop", "tv"},      {"chair", "couch"},        {"suitcase", "backpack"},
+      {"horse", "dog"},      {"airplane", "kite"},      {"skateboard", "surfboard"},
+      {"surfboard", "skis"}, {"sports ball", "frisbee"}};
+  const auto it = kConfusions.find(c);
+  return it == kConfusions.end() ? c : it->second;
+}
 
 std::vector<Detection> simulateDetections(const cv::Mat& instance_ids,
                                           const std::map<int, std::string>& class_by_object,
@@ -85,8 +137,15 @@ std::vector<Detection> simulateDetections(const cv::Mat& instance_ids,
     if (missed) continue;
     cv::Mat mask = instance_ids == object_id;
     mask = perturbMask(mask, mask_rng, o, scale);
+    std::string reported = class_name;
+    if (o.confusion_rate > 0 || o.spill_rate > 0 || o.partial_rate > 0) {
+      Rng flaw_rng(streamSeed(seed, static_cast<uint64_t>(frame_index),
+                              static_cast<uint64_t>(object_id), kFlawStream));
+      if (flaw_rng.bernoulli(o.confusion_rate)) reported = confusedClass(class_name);
+      mask = grossFlaws(mask, flaw_rng, o);
+    }
     if (cv::countNonZero(mask) < min_pixels) continue;  // eroded away: a miss too
-    found.push_back({object_id, class_name, score, mask});
+    found.push_back({object_id, reported, score, mask});
   }
   const bool false_positive = rng.bernoulli(o.false_positive_rate);
   Rng fp_rng(rng.next());

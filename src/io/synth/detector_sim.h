@@ -32,6 +32,18 @@ struct DetectorSimOptions {
   /// [0.5, false_score_max].
   double true_score_min = 0.7;
   double false_score_max = 0.75;
+  /// Probability that a detection reports a confusable class instead of the object's own
+  /// (confusedClass(): a car as a truck, a teddy bear as a dog, a chair as a couch, ...).
+  double confusion_rate = 0.0;
+  /// Probability that a mask spills grossly onto its surroundings: dilated by 6-12 % of its
+  /// box's larger side.
+  double spill_rate = 0.0;
+  /// Probability that a mask covers only part of the object: cut by a random line through
+  /// its box, keeping 50-80 % of it.
+  double partial_rate = 0.0;
+  /// Results this many frames late: the detections reported on a detection frame f describe
+  /// frame f - late_frames (applied by the synthetic source; 0 = on time).
+  int late_frames = 0;
   /// Classes false positives are drawn from.
   std::vector<std::string> false_positive_classes{"chair", "cup",          "bottle",
                                                   "book",  "potted plant", "tv"};
@@ -47,6 +59,9 @@ std::vector<Detection> simulateDetections(const cv::Mat& instance_ids,
                                           uint64_t seed, int64_t frame_index,
                                           const DetectorSimOptions& options,
                                           std::vector<int>* object_of_detection = nullptr);
+
+/// The class a detector may confuse `class_name` with (itself when none is listed).
+std::string confusedClass(const std::string& class_name);
 
 /// True when the detector runs on this frame.
 inline bool isDetectionFrame(int64_t frame_index, const DetectorSimOptions& options) {

@@ -144,4 +144,18 @@ Eigen::Isometry3d at(double x, double y, double z, double yaw, double pitch, dou
   return T;
 }
 
+Eigen::AlignedBox3d objectBounds(const SceneObject& object) {
+  Eigen::AlignedBox3d box;
+  for (const auto& part : object.parts) {
+    V3 h;
+    if (!localBounds(part.geometry, &h)) continue;
+    for (int c = 0; c < 8; ++c) {
+      const Eigen::Vector3d corner((c & 1) ? h.x : -h.x, (c & 2) ? h.y : -h.y,
+                                   (c & 4) ? h.z : -h.z);
+      box.extend(part.T_parent_primitive * corner);
+    }
+  }
+  return box;
+}
+
 }  // namespace emf::io::synth

@@ -49,6 +49,9 @@ struct SceneObject {
   std::string class_name;
   std::vector<Primitive> parts;
   Trajectory trajectory;
+  /// How it moves, for reports: the generated scenes' motion families joined by '+' (e.g.
+  /// "rock+push"), "still" for an object that never moves; empty in the presets.
+  std::string motion;
 };
 
 struct Scene {
@@ -62,6 +65,9 @@ struct Scene {
 
   double timeOf(int64_t frame_index) const { return static_cast<double>(frame_index) / fps; }
 };
+
+/// The box around an object's parts in its own frame (unbounded parts are skipped).
+Eigen::AlignedBox3d objectBounds(const SceneObject& object);
 
 /// Objects count as visible in a frame when at least this fraction of the image shows them
 /// (0.1 %: 307 pixels at 640x480).

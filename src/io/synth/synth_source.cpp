@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <utility>
@@ -57,11 +58,42 @@ bool parseBool(const std::string& preset, const std::string& key, const std::str
   throw IoError(where(preset, key, value) + " is not a boolean: use 0/1, true/false or on/off");
 }
 
+double parseReal(const std::string& preset, const std::string& key, const std::string& value,
+                 double lo, double hi) {
+  errno = 0;
+  char* end = nullptr;
+  const double v = std::strtod(value.c_str(), &end);
+  if (value.empty() || errno != 0 || *end != '\0' || !std::isfinite(v)) {
+    throw IoError(where(preset, key, value) + " is not a number");
+  }
+  if (v < lo || v > hi) {
+    throw IoError(where(preset, key, value) + " is out of range [" + std::to_string(lo) + ", " +
+                  std::to_string(hi) + "]");
+  }
+  return v;
+}
+
+const std::vector<std::string>& randomOnlyKeys() {
+  static const std::vector<std::string> kKeys = {"movers", "still", "camera", "motions"};
+  return kKeys;
+}
+
 }  // namespace
 
+void DetectorOverrides::applyTo(DetectorSimOptions* d) const {
+  if (miss_rate) d->miss_rate = *miss_rate;
+  if (false_positive_rate) d->false_positive_rate = *false_positive_rate;
+  if (confusion_rate) d->confusion_rate = *confusion_rate;
+  if (spill_rate) d->spill_rate = *spill_rate;
+  if (partial_rate) d->partial_rate = *partial_rate;
+  if (late_frames) d->late_frames = *late_frames;
+}
+
 const std::vector<std::string>& synthQueryKeys() {
-  static const std::vector<std::string> kKeys = {"frames",    "seed",  "width",  "height",
-                                                 "det_every", "noise", "threads"};
+  static const std::vector<std::string> kKeys = {
+      "frames",   "seed",     "width",  "height",        "det_every", "noise",
+      "threads",  "det_miss", "det_fp", "det_confusion", "det_spill", "det_partial",
+      "det_late", "movers",   "still",  "camera",        "motions"};
   return kKeys;
 }
 
@@ -69,8 +101,9 @@ SynthOptions synthOptionsFromQuery(const std::string& preset,
                                    const std::map<std::string, std::string>& query,
                                    const SourceOptions& source) {
   const auto names = presetNames();
-  if (std::find(names.begin(), names.end(), preset) == names.end()) {
-    throw IoError("synth: unknown preset '" + preset + "': valid presets are " + joined(names));
+  if (preset != "random" && std::find(names.begin(), names.end(), preset) == names.end()) {
+    throw IoError("synth: unknown preset '" + preset + "': valid presets are " + joined(names) +
+                  ", and 'random' (the generated scenes, synth:random?seed=N)");
   }
   SynthOptions o;
   o.preset = preset;
@@ -89,6 +122,51 @@ SynthOptions synthOptionsFromQuery(const std::string& preset,
       o.noise = parseBool(preset, key, value);
     } else if (key == "threads") {
       o.threads = static_cast<int>(parseInteger(preset, key, value, 0, 64));
+    } else if (key == "det_miss") {
+      o.detector_overrides.miss_rate = parseReal(preset, key, value, 0.0, 1.0);
+    } else if (key == "det_fp") {
+      o.detector_overrides.false_positive_rate = parseReal(preset, key, value, 0.0, 1.0);
+    } else if (key == "det_confusion") {
+      o.detector_overrides.confusion_rate = parseReal(preset, key, value, 0.0, 1.0);
+    } else if (key == "det_spill") {
+      o.detector_overrides.spill_rate = parseReal(preset, key, value, 0.0, 1.0);
+    } else if (key == "det_partial") {
+      o.detector_overrides.partial_rate = parseReal(preset, key, value, 0.0, 1.0);
+    } else if (key == "det_late") {
+      o.detector_overrides.late_frames = static_cast<int>(parseInteger(preset, key, value, 0, 30));
+    } else if (std::find(randomOnlyKeys().begin(), randomOnlyKeys().end(), key) !=
+               randomOnlyKeys().end()) {
+      if (preset != "random") {
+        throw IoError("synth:" + preset + ": query parameter '" + key +
+                      "' is for the generated scenes only (synth:random?seed=N&" + key + "=...)");
+      }
+      if (key == "movers") {
+        o.random.movers = static_cast<int>(parseInteger(preset, key, value, 1, 4));
+      } else if (key == "still") {
+        o.random.still = static_cast<int>(parseInteger(preset, key, value, 0, 3));
+      } else if (key == "camera") {
+        const auto& cams = cameraFamilyNames();
+        if (std::find(cams.begin(), cams.end(), value) == cams.end()) {
+          throw IoError(where(preset, key, value) + ": valid camera families are " + joined(cams));
+        }
+        o.random.camera = value;
+      } else {
+        o.random.motions.clear();
+        std::string item;
+        for (size_t i = 0; i <= value.size(); ++i) {
+          if (i == value.size() || value[i] == ',') {
+            const auto& fams = motionFamilyNames();
+            if (std::find(fams.begin(), fams.end(), item) == fams.end()) {
+              throw IoError(where(preset, key, value) + ": unknown motion family '" + item +
+                            "': valid ones are " + joined(fams));
+            }
+            o.random.motions.push_back(item);
+            item.clear();
+          } else {
+            item += value[i];
+          }
+        }
+      }
     } else {
       throw IoError("synth:" + preset + ": unknown query parameter '" + key + "': valid ones are " +
                     joined(synthQueryKeys()));
@@ -103,8 +181,16 @@ SynthOptions synthOptionsFromQuery(const std::string& preset,
     o.intrinsics = k;
   }
   if (source.max_frames > 0) {
-    const int preset_frames = o.frames > 0 ? o.frames : makePreset(preset).default_frames;
+    const int preset_frames = o.frames > 0         ? o.frames
+                              : preset == "random" ? o.random.frames
+                                                   : makePreset(preset).default_frames;
     o.frames = std::min(preset_frames, source.max_frames);
+  }
+  if (preset == "random" && o.random.camera == "orbit" && o.random.motions.size() == 1 &&
+      o.random.motions[0] == "pass") {
+    throw IoError(
+        "synth:random: motions=pass needs camera=sweep or camera=xyz (an orbiting "
+        "camera has no side to enter from)");
   }
   return o;
 }
@@ -120,14 +206,33 @@ RenderOptions renderOptions(const SynthOptions& o) {
 }
 }  // namespace
 
+Scene makeScene(const SynthOptions& options, DetectorSimOptions* detector) {
+  if (options.preset != "random") return makePreset(options.preset);
+  RandomSceneOptions r = options.random;
+  if (options.frames > 0) r.frames = std::max(30, options.frames);
+  RandomScene generated = makeRandomScene(options.seed, r);
+  const int every = detector->every_n_frames;
+  *detector = generated.detector;
+  detector->every_n_frames = every;
+  return std::move(generated.scene);
+}
+
 SynthSource::SynthSource(const SynthOptions& options)
-    : SynthSource(options, makePreset(options.preset)) {}
+    : options_(options), renderer_(renderOptions(options)), noise_(options.depth_noise) {
+  detector_ = options.detector;
+  scene_ = makeScene(options, &detector_);
+  options.detector_overrides.applyTo(&detector_);
+  frames_ = options.frames > 0 ? options.frames : scene_.default_frames;
+  for (const auto& obj : scene_.objects) classes_[obj.id] = obj.class_name;
+}
 
 SynthSource::SynthSource(const SynthOptions& options, Scene scene)
     : options_(options),
       scene_(std::move(scene)),
       renderer_(renderOptions(options)),
-      noise_(options.depth_noise) {
+      noise_(options.depth_noise),
+      detector_(options.detector) {
+  options.detector_overrides.applyTo(&detector_);
   frames_ = options.frames > 0 ? options.frames : scene_.default_frames;
   for (const auto& obj : scene_.objects) classes_[obj.id] = obj.class_name;
 }
@@ -140,14 +245,14 @@ bool SynthSource::next(Frame& frame) {
 
 std::string SynthSource::describe() const {
   char text[256];
-  std::snprintf(
-      text, sizeof(text),
-      "synthetic scene '%s' (%lld frames, %dx%d, seed %llu, noise %s, detections %s)",
-      scene_.name.c_str(), static_cast<long long>(frames_), options_.width, options_.height,
-      static_cast<unsigned long long>(options_.seed), options_.noise ? "on" : "off",
-      options_.detector.every_n_frames > 0
-          ? ("every " + std::to_string(options_.detector.every_n_frames) + " frames").c_str()
-          : "off");
+  std::snprintf(text, sizeof(text),
+                "synthetic scene '%s' (%lld frames, %dx%d, seed %llu, noise %s, detections %s)",
+                scene_.name.c_str(), static_cast<long long>(frames_), options_.width,
+                options_.height, static_cast<unsigned long long>(options_.seed),
+                options_.noise ? "on" : "off",
+                detector_.every_n_frames > 0
+                    ? ("every " + std::to_string(detector_.every_n_frames) + " frames").c_str()
+                    : "off");
   return text;
 }
 
@@ -198,9 +303,20 @@ void SynthSource::renderFrame(int64_t index, Frame* frame) const {
     frame->depth = r.depth;
   }
   frame->color = r.color;
-  if (isDetectionFrame(index, options_.detector)) {
-    frame->detections =
-        simulateDetections(r.instance_ids, classes_, options_.seed, index, options_.detector);
+  if (isDetectionFrame(index, detector_)) {
+    if (detector_.late_frames == 0) {
+      frame->detections =
+          simulateDetections(r.instance_ids, classes_, options_.seed, index, detector_);
+    } else if (index >= detector_.late_frames) {
+      // A late result: the detector saw the frame late_frames ago.
+      const double t_seen = scene_.timeOf(index - detector_.late_frames);
+      std::vector<Eigen::Isometry3d> seen_objects;
+      for (const auto& obj : scene_.objects) seen_objects.push_back(obj.trajectory.pose(t_seen));
+      RenderOutput seen;
+      renderer_.render(scene_, scene_.camera.pose(t_seen), seen_objects, &seen);
+      frame->detections =
+          simulateDetections(seen.instance_ids, classes_, options_.seed, index, detector_);
+    }
   }
 }
 

@@ -9,11 +9,17 @@
 
 namespace emf::io::synth {
 
-/// amplitude * sin(2 pi frequency_hz * s + phase_rad), per axis.
+/// amplitude * sin(2 pi frequency_hz * s + phase_rad), per axis, times an envelope in clip time
+/// t: 0 before on_s, rising with smootherstep over ramp_s, 1 until off_s - ramp_s, falling to 0
+/// at off_s. The default window is always on.
 struct Sinusoid {
   Eigen::Vector3d amplitude = Eigen::Vector3d::Zero();  // metres, or radians (rotation vector)
   double frequency_hz = 0.0;
   double phase_rad = 0.0;
+  double on_s = -1e300, off_s = 1e300, ramp_s = 1.0;
+
+  /// The envelope at clip time t, in [0, 1].
+  double envelope(double t) const;
 };
 
 /// A move from start_s to end_s (clip time t, seconds): translation delta_m (world frame) and
@@ -23,6 +29,13 @@ struct EasedMove {
   double start_s = 0.0, end_s = 1.0;
   Eigen::Vector3d delta_m = Eigen::Vector3d::Zero();
   Eigen::Vector3d delta_rad = Eigen::Vector3d::Zero();
+};
+
+/// One sample of a keyframed trajectory: the pose T_world_object at clip time t_s.
+struct PoseKey {
+  double t_s = 0.0;
+  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
 };
 
 /// T_world_object(t) = [R(t) | p(t)] with
@@ -40,6 +53,10 @@ struct Trajectory {
   bool face_velocity = false;
   double still_until_s = 0.0;  // > 0: the object is at rest (s = 0) until this time
   double ramp_s = 1.0;         // duration of the uniform acceleration after still_until_s
+  /// Keyframes in increasing time (the generated scenes sample their motions into them): when
+  /// given, they alone define the pose, interpolated linearly (position) and by slerp
+  /// (rotation) between neighbours and held before the first and after the last.
+  std::vector<PoseKey> keys;
 
   /// Pose at clip time t (seconds).
   Eigen::Isometry3d pose(double t) const;

@@ -1,0 +1,245 @@
+// The generated scenes (synth:random): deterministic per seed, every family drawn, objects in
+// view and apart, the camera within hand-held limits, options honoured, bad options named.
+#include "io/synth/random_scene.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "common/error.h"
+#include "io/synth/motion_plan.h"
+#include "io/synth/renderer.h"
+#include "io/synth/synth_source.h"
+
+namespace emf::io::synth {
+namespace {
+
+constexpr double kDeg = 3.141592653589793 / 180.0;
+// Hand-held limits of the camera rig (random_scene.h) plus the tremor's share.
+constexpr double kCameraMaxSpeedMps = 0.45;
+constexpr double kCameraMaxRateDegPs = 35.0;
+// Movers are planned to peak at about 0.5 m/s (pendulums and floats at 0.45).
+constexpr double kObjectMaxSpeedMps = 0.6;
+constexpr double kObjectMaxRateDegPs = 120.0;
+
+RandomScene scene(uint64_t seed, RandomSceneOptions o = {}) { return makeRandomScene(seed, o); }
+
+TEST(RandomScene, SameSeedSameSceneAnotherSeedAnother) {
+  const RandomScene a = scene(7), b = scene(7), c = scene(8);
+  ASSERT_EQ(a.scene.objects.size(), b.scene.objects.size());
+  EXPECT_EQ(a.scene.description, b.scene.description);
+  for (size_t k = 0; k < a.scene.objects.size(); ++k) {
+    EXPECT_TRUE(a.scene.objects[k].trajectory.pose(5.0).isApprox(
+        b.scene.objects[k].trajectory.pose(5.0), 1e-12));
+  }
+  EXPECT_TRUE(a.scene.camera.pose(3.0).isApprox(b.scene.camera.pose(3.0), 1e-12));
+  EXPECT_NE(a.scene.description, c.scene.description);
+  EXPECT_EQ(a.detector.miss_rate, b.detector.miss_rate);
+}
+
+TEST(RandomScene, SeedsSpanEveryFamilyAndSize) {
+  std::set<std::string> motions, cameras, classes;
+  std::set<int> mover_counts, still_counts;
+  double smallest = 1e9, largest = 0;
+  for (uint64_t seed = 1; seed <= 60; ++seed) {
+    const RandomScene r = scene(seed);
+    int movers = 0, still = 0;
+    for (const auto& o : r.scene.objects) {
+      std::string m = o.motion;
+      for (size_t plus; (plus = m.find('+')) != std::string::npos; m = m.substr(plus + 1)) {
+        motions.insert(m.substr(0, plus));
+      }
+      motions.insert(m);
+      classes.insert(o.class_name);
+      if (o.motion == "still") {
+        ++still;
+        continue;
+      }
+      ++movers;
+      const double size = objectBounds(o).sizes().maxCoeff();
+      smallest = std::min(smallest, size);
+      largest = std::max(largest, size);
+    }
+    mover_counts.insert(movers);
+    still_counts.insert(still);
+    cameras.insert(r.scene.description.substr(r.scene.description.find("camera ") + 7, 5));
+  }
+  for (const char* m : {"drive", "spin", "rock", "wobble", "swing", "carry", "tumble", "push",
+                        "float", "pass", "still"}) {
+    EXPECT_TRUE(motions.count(m)) << m;
+  }
+  EXPECT_TRUE(cameras.count("sweep") && cameras.count("xyz a") && cameras.count("orbit"));
+  EXPECT_TRUE(mover_counts.count(1) && mover_counts.count(2) && mover_counts.count(3));
+  EXPECT_TRUE(still_counts.count(0) && still_counts.count(1) && still_counts.count(2));
+  EXPECT_LE(smallest, 0.25);
+  EXPECT_GE(largest, 1.0);
+  EXPECT_GE(classes.size(), 10u);
+}
+
+TEST(RandomScene, ObjectsInViewApartAndWithinSpeedLimits) {
+  for (uint64_t seed = 1; seed <= 6; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const RandomScene r = scene(seed);
+    const Scene& s = r.scene;
+    double v = 0, w = 0;
+    peakSpeeds([&](double t) { return s.camera.pose(t); }, 20.0, 30.0, &v, &w);
+    EXPECT_LE(v, kCameraMaxSpeedMps);
+    EXPECT_LE(w / kDeg, kCameraMaxRateDegPs);
+    RenderOptions ro;
+    ro.width = 64;
+    ro.height = 48;
+    ro.threads = 1;
+    const Renderer renderer(ro);
+    std::vector<int> seen(s.objects.size(), 0);
+    int frames = 0;
+    for (int f = 0; f < 600; f += 10, ++frames) {
+      const double t = s.timeOf(f);
+      std::vector<Eigen::Isometry3d> poses;
+      for (const auto& o : s.objects) poses.push_back(o.trajectory.pose(t));
+      RenderOutput out;
+      renderer.render(s, s.camera.pose(t), poses, &out);
+      const std::vector<int> counts = instancePixelCounts(out.instance_ids);
+      for (size_t k = 0; k < s.objects.size(); ++k) {
+        const size_t id = static_cast<size_t>(s.objects[k].id);
+        if (id < counts.size() && counts[id] >= 3) ++seen[k];
+      }
+      // No two objects overlap (their boxes may touch diagonally: check the centres' gap).
+      for (size_t a = 0; a < s.objects.size(); ++a) {
+        for (size_t b = a + 1; b < s.objects.size(); ++b) {
+          const Eigen::AlignedBox3d ba = objectBounds(s.objects[a]),
+                                    bb = objectBounds(s.objects[b]);
+          const Eigen::Vector3d ca = poses[a] * ba.center(), cb = poses[b] * bb.center();
+          const double ra = 0.35 * ba.sizes().minCoeff(), rb = 0.35 * bb.sizes().minCoeff();
+          EXPECT_GT((ca - cb).norm(), ra + rb) << "objects " << a << " and " << b << " at " << t;
+        }
+      }
+    }
+    for (size_t k = 0; k < s.objects.size(); ++k) {
+      const double need = s.objects[k].motion == "pass" ? 0.3 : 0.55;
+      EXPECT_GE(static_cast<double>(seen[k]) / frames, need) << s.objects[k].class_name;
+      peakSpeeds([&](double t) { return s.objects[k].trajectory.pose(t); }, 20.0, 30.0, &v, &w);
+      EXPECT_LE(v, kObjectMaxSpeedMps) << s.objects[k].class_name << " " << s.objects[k].motion;
+      EXPECT_LE(w / kDeg, kObjectMaxRateDegPs)
+          << s.objects[k].class_name << " " << s.objects[k].motion;
+      // Still objects never move; movers move at least 5 cm at some time.
+      double farthest = 0;
+      const Eigen::AlignedBox3d box = objectBounds(s.objects[k]);
+      const Eigen::Isometry3d first = s.objects[k].trajectory.pose(0);
+      for (double t = 0; t < 20; t += 0.25) {
+        for (int c = 0; c < 8; ++c) {
+          const Eigen::Vector3d corner =
+              box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c));
+          farthest = std::max(farthest,
+                              (s.objects[k].trajectory.pose(t) * corner - first * corner).norm());
+        }
+      }
+      if (s.objects[k].motion == "still") {
+        EXPECT_EQ(farthest, 0.0);
+      } else {
+        EXPECT_GT(farthest, 0.05) << s.objects[k].class_name << " " << s.objects[k].motion;
+      }
+    }
+  }
+}
+
+TEST(RandomScene, OptionsAreHonoured) {
+  RandomSceneOptions o;
+  o.movers = 2;
+  o.still = 0;
+  o.camera = "orbit";
+  o.motions = {"rock"};
+  for (uint64_t seed : {3u, 4u}) {
+    const RandomScene r = scene(seed, o);
+    int movers = 0;
+    for (const auto& obj : r.scene.objects) {
+      EXPECT_TRUE(obj.motion.rfind("rock", 0) == 0 || obj.motion.rfind("wobble", 0) == 0)
+          << obj.motion;
+      ++movers;
+    }
+    EXPECT_EQ(movers, 2);
+    // An orbit keeps its distance to the stage centre and goes around it.
+    const Eigen::Vector3d c0 = r.scene.camera.pose(0).translation(),
+                          c1 = r.scene.camera.pose(15).translation();
+    EXPECT_NEAR(c0.head<2>().norm(), c1.head<2>().norm(), 0.2);
+    EXPECT_GT((c0 - c1).head<2>().norm(), 1.0);
+  }
+}
+
+TEST(RandomScene, BadOptionsNameTheValidOnes) {
+  RandomSceneOptions o;
+  o.camera = "drone";
+  try {
+    makeRandomScene(1, o);
+    FAIL();
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("'drone': valid ones are sweep, xyz, orbit"),
+              std::string::npos)
+        << e.what();
+  }
+  o = {};
+  o.motions = {"juggle"};
+  EXPECT_THROW(makeRandomScene(1, o), InvalidArgument);
+  o = {};
+  o.movers = 5;
+  EXPECT_THROW(makeRandomScene(1, o), InvalidArgument);
+}
+
+TEST(RandomScene, UriQueryKeys) {
+  SourceOptions none;
+  const SynthOptions o = synthOptionsFromQuery(
+      "random", {{"seed", "5"}, {"movers", "3"}, {"camera", "xyz"}, {"motions", "spin,push"}},
+      none);
+  EXPECT_EQ(o.random.movers, 3);
+  EXPECT_EQ(o.random.camera, "xyz");
+  EXPECT_EQ(o.random.motions, (std::vector<std::string>{"spin", "push"}));
+  try {
+    synthOptionsFromQuery("cars", {{"movers", "2"}}, none);
+    FAIL();
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("for the generated scenes only"), std::string::npos);
+  }
+  EXPECT_THROW(synthOptionsFromQuery("random", {{"motions", "spin,fly"}}, none), IoError);
+  EXPECT_THROW(synthOptionsFromQuery("random", {{"det_miss", "1.5"}}, none), IoError);
+}
+
+TEST(RandomScene, SourceUsesTheScenesDetectorAndTheOverrides) {
+  SynthOptions o = synthOptionsFromQuery("random",
+                                         {{"seed", "9"},
+                                          {"frames", "40"},
+                                          {"width", "80"},
+                                          {"height", "60"},
+                                          {"det_fp", "0"},
+                                          {"det_late", "2"}},
+                                         SourceOptions{});
+  o.threads = 1;
+  SynthSource src(o);
+  const DetectorSimOptions expected = makeRandomScene(9,
+                                                      [] {
+                                                        RandomSceneOptions r;
+                                                        r.frames = 40;
+                                                        return r;
+                                                      }())
+                                          .detector;
+  EXPECT_EQ(src.detector().miss_rate, expected.miss_rate);
+  EXPECT_EQ(src.detector().false_positive_rate, 0.0);
+  EXPECT_EQ(src.detector().late_frames, 2);
+  // A late result on frame 30 is the detector's view of frame 28.
+  Frame f30, f28;
+  src.renderFrame(30, &f30);
+  src.renderFrame(28, &f28);
+  ASSERT_TRUE(f30.detections.has_value());
+  std::map<int, std::string> classes;
+  for (const auto& obj : src.scene().objects) classes[obj.id] = obj.class_name;
+  const std::vector<Detection> seen =
+      simulateDetections(f28.instance_ids, classes, o.seed, 30, src.detector());
+  ASSERT_EQ(seen.size(), f30.detections->size());
+  for (size_t i = 0; i < seen.size(); ++i) {
+    EXPECT_EQ(cv::countNonZero(seen[i].mask != (*f30.detections)[i].mask), 0);
+  }
+}
+
+}  // namespace
+}  // namespace emf::io::synth
