@@ -33,7 +33,7 @@ enum class Kind {
   kBottle,
   kBook,
   kLaptop,
-  kBall,
+  kBackpack,
   kVase,
   kHorse,
   kAirship,
@@ -56,11 +56,11 @@ struct ShapeDef {
   double weight = 1.0;
 };
 const ShapeDef kShapes[] = {
-    {Kind::kMug, 0.145, 1.0, 1.4, bit(kCarry) | bit(kTumble)},
+    {Kind::kMug, 0.145, 1.2, 1.6, bit(kCarry) | bit(kTumble)},
     {Kind::kBottle, 0.3, 0.9, 1.3, bit(kCarry) | bit(kSpin) | bit(kTumble) | bit(kRock)},
     {Kind::kBook, 0.22, 1.1, 1.6, bit(kCarry) | bit(kTumble) | bit(kPush)},
     {Kind::kLaptop, 0.34, 0.9, 1.1, bit(kCarry) | bit(kPush) | bit(kSpin)},
-    {Kind::kBall, 0.22, 0.9, 1.4, bit(kCarry) | bit(kFloat) | bit(kSwing)},
+    {Kind::kBackpack, 0.44, 0.8, 1.1, bit(kCarry) | bit(kFloat) | bit(kSwing) | bit(kPush)},
     {Kind::kVase, 0.4, 0.7, 1.3, bit(kSpin) | bit(kCarry) | bit(kPush) | bit(kRock) | bit(kSwing)},
     {Kind::kHorse, 0.8, 0.8, 1.25, bit(kRock) | bit(kPush) | bit(kSpin), 5.0},
     {Kind::kAirship, 0.8, 0.8, 1.5, bit(kFloat) | bit(kPass)},
@@ -143,10 +143,11 @@ Material randomMaterial(Rng& rng) {
 // ---- the scene being generated ------------------------------------------------------------------
 
 struct Layout {
-  double T = 20.0;       // timeline, seconds
-  std::string camera;    // family
-  double D = 2.4;        // camera distance to the stage centre (sweep, xyz) or orbit radius
-  double sweep_x = 0.0;  // sideways amplitude of the sweep
+  double T = 20.0;           // timeline, seconds
+  std::string camera;        // family
+  double D = 2.4;            // camera distance to the stage centre (sweep, xyz) or orbit radius
+  double sweep_x = 0.0;      // sideways amplitude of the sweep
+  double stage_far_d = 3.5;  // farthest an object stands from the camera (orbit: centre)
   double room_hx = 3.0, room_y_lo = -4.0, room_y_hi = 3.0, ceiling = 2.6;
   std::vector<Occupant> occupants;  // furniture, stands, objects, the camera
 };
@@ -161,7 +162,7 @@ Eigen::Vector2d stagePoint(Rng& rng, const Layout& L, double clearance, double m
   }
   // Distance from the camera line (y = -D) and the view's half width there (fx 525 at 640).
   const double lo = std::min(L.D + 0.6, std::max({1.0, 0.6 * L.D, min_distance}));
-  const double d = rng.uniform(lo, L.D + 1.1);
+  const double d = rng.uniform(lo, std::max(lo, L.stage_far_d));
   const double half = std::max(0.1, 0.5 * d - clearance);
   return {rng.uniform(-half, half), d - L.D};
 }
@@ -169,7 +170,7 @@ Eigen::Vector2d stagePoint(Rng& rng, const Layout& L, double clearance, double m
 bool inStage(const Layout& L, const Eigen::Vector2d& p) {
   if (L.camera == "orbit") return p.norm() <= std::max(0.3, std::min(1.3, L.D - 1.0)) + 0.2;
   const double d = p.y() + L.D;
-  return d >= std::max(0.9, 0.55 * L.D) && d <= L.D + 1.3 && std::fabs(p.x()) <= 0.55 * d;
+  return d >= std::max(0.9, 0.55 * L.D) && d <= L.stage_far_d + 0.2 && std::fabs(p.x()) <= 0.55 * d;
 }
 
 /// World boxes of `object` over the timeline at kCheckHz.
@@ -216,11 +217,10 @@ SceneObject buildShape(Kind kind, int id, double s, Rng& rng, double* rest_z) {
       return book(id, s, a);
     case Kind::kLaptop:
       return laptop(id, s, solid(0.6f, 0.6f, 0.62f), b);
-    case Kind::kBall:
-      *rest_z = 0.11 * s;
-      return ball(id, s, a);
+    case Kind::kBackpack:
+      return backpack(id, s, a, b);
     case Kind::kVase:
-      return vase(id, s, a, false);
+      return vase(id, s, a);
     case Kind::kHorse:
       *rest_z = kRockerRadius * s;
       return rockingHorse(id, s, a, b);
@@ -323,7 +323,7 @@ bool planMotion(Family family, Kind kind, double s, double rest_z, Rng& rng, con
   switch (family) {
     case kDrive: {
       // A loop: an ellipse whose tightest bend still has a radius of 0.25 m.
-      const double a = rng.uniform(std::max(0.35, 1.2 * size), std::max(0.5, 2.2 * size));
+      const double a = rng.uniform(std::max(0.35, 1.0 * size), std::max(0.5, 1.8 * size));
       const double b = rng.uniform(std::max(0.25, std::sqrt(0.25 * a)), std::max(0.3, a));
       const double psi = L.camera == "orbit" ? rng.uniform(0.0, kPi) : rng.uniform(-0.4, 0.4);
       const double dir = rng.bernoulli(0.5) ? 1.0 : -1.0;
@@ -500,9 +500,9 @@ bool planMotion(Family family, Kind kind, double s, double rest_z, Rng& rng, con
     }
     case kPush: {
       m->plan = MotionPlan(poseAt(p, rest_z, yaw0));
-      m->plan.rest(rng.uniform(3.0, 10.0));
+      m->plan.rest(rng.uniform(3.0, std::max(3.5, std::min(10.0, T - 8.0))));
       int pushes = 0;
-      while (m->plan.end() < T - 4.0 && (pushes == 0 || rng.bernoulli(0.4))) {
+      while (pushes == 0 || (m->plan.end() < T - 4.0 && rng.bernoulli(0.4))) {
         const double len = rng.uniform(0.3, 0.9);
         const Eigen::Vector2d at2 = m->plan.endPose().translation().head<2>();
         const auto dir = stageDirection(rng, L, at2, len);
@@ -555,7 +555,7 @@ bool planMotion(Family family, Kind kind, double s, double rest_z, Rng& rng, con
     }
     case kPass: {
       if (L.camera == "orbit") return false;  // there is no "outside the view" to come from
-      const double d = rng.uniform(std::max(1.0, 0.6 * L.D), L.D + 1.0);
+      const double d = rng.uniform(std::max(1.0, 0.6 * L.D), std::max(1.0, L.stage_far_d));
       const double out = std::min(0.62 * d + L.sweep_x + 0.6 * size, L.room_hx - 0.2 - 0.6 * size);
       const double side = rng.bernoulli(0.5) ? 1.0 : -1.0;
       const double z = kind == Kind::kAirship ? rng.uniform(0.7, 1.4) : rest_z;
@@ -757,16 +757,22 @@ Attempt generate(uint64_t seed, int attempt, const RandomSceneOptions& options, 
     const double c = rng.uniform();
     L.camera = c < 0.5 ? "sweep" : (c < 0.72 ? "xyz" : "orbit");
   }
-  L.D = L.camera == "orbit" ? rng.uniform(1.9, 2.8) : rng.uniform(1.6, 3.2);
+  // The wall the camera faces stays within kFarWallM (the sensor sees 0.4-4.5 m): beyond it a
+  // camera would see a floor and little else to track against.
+  constexpr double kFarWallM = 4.1;
+  L.D = L.camera == "orbit" ? rng.uniform(1.5, 1.9) : rng.uniform(1.6, 3.0);
   if (L.camera == "orbit") {
-    L.room_hx = std::max(rng.uniform(2.6, 3.6), L.D + 1.1);
-    const double hy = std::max(rng.uniform(2.6, 3.6), L.D + 1.1);
+    L.room_hx = rng.uniform(L.D + 0.6, std::max(L.D + 0.6, kFarWallM - L.D));
+    const double hy = rng.uniform(L.D + 0.6, std::max(L.D + 0.6, kFarWallM - L.D));
     L.room_y_lo = -hy;
     L.room_y_hi = hy;
+    L.stage_far_d = L.D + std::min(1.3, L.D - 1.0);
   } else {
     L.room_hx = rng.uniform(2.4, 3.6);
     L.room_y_lo = -L.D - rng.uniform(0.8, 1.5);
-    L.room_y_hi = rng.uniform(1.9, 2.9);
+    const double back = rng.uniform(std::min(kFarWallM, std::max(3.4, L.D + 1.4)), kFarWallM);
+    L.room_y_hi = back - L.D;
+    L.stage_far_d = std::min(L.D + 1.1, back - 0.45);
   }
   const double hz = rng.uniform(1.35, 1.6);
   L.ceiling = 2 * hz - 0.2;
@@ -793,8 +799,8 @@ Attempt generate(uint64_t seed, int attempt, const RandomSceneOptions& options, 
     const double r = L.D + 0.6;
     stage.boxes.push_back({Eigen::Vector3d(-r, -r, 0), Eigen::Vector3d(r, r, 2.0)});
   } else {
-    stage.boxes.push_back({Eigen::Vector3d(-0.65 * (L.D + 1.3), -L.D, 0),
-                           Eigen::Vector3d(0.65 * (L.D + 1.3), 1.4, 2.0)});
+    stage.boxes.push_back({Eigen::Vector3d(-0.6 * L.stage_far_d, -L.D, 0),
+                           Eigen::Vector3d(0.6 * L.stage_far_d, L.stage_far_d - L.D - 0.3, 2.0)});
   }
   addFurniture(scene, rng, &L, stage);
   std::string description = "Room " + std::to_string(2 * L.room_hx).substr(0, 3) + " x " +
@@ -827,13 +833,17 @@ Attempt generate(uint64_t seed, int attempt, const RandomSceneOptions& options, 
   for (int f = 0; f < kFamilies; ++f) {
     if (families & (1u << f)) allowed.push_back(static_cast<Family>(f));
   }
-  const double far_d = L.camera == "orbit" ? L.D + 1.3 : L.D + 1.1;
+  const double far_d = L.stage_far_d;
   int placed_movers = 0;
   for (int i = 0; i < movers; ++i) {
     bool placed = false;
     for (int tries = 0; tries < 60 && !placed; ++tries) {
+      // Drives fit the stage less often than the rest: drawn twice as often.
+      std::vector<Family> draw = allowed;
+      if (std::find(allowed.begin(), allowed.end(), kDrive) != allowed.end())
+        draw.push_back(kDrive);
       const Family family =
-          allowed[static_cast<size_t>(rng.uniformInt(0, static_cast<int>(allowed.size()) - 1))];
+          draw[static_cast<size_t>(rng.uniformInt(0, static_cast<int>(draw.size()) - 1))];
       std::vector<const ShapeDef*> shapes;
       double total_weight = 0;
       for (const auto& d : kShapes) {

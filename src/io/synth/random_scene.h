@@ -2,9 +2,9 @@
 // camera motion, set of moving and still objects and detector imperfections, with the same
 // exact ground truth, depth noise and simulated detector as the presets.
 //
-//  - Rooms of 4.8-7.2 m across with 2-5 pieces of furniture along the walls and sometimes a
+//  - Rooms of 4-7 m across with 2-5 pieces of furniture along the walls and sometimes a
 //    static occluder (a low cabinet or a table) on the floor among the objects.
-//  - 1-4 movers from the shape library (shapes.h: mug, bottle, book, laptop, ball, vase,
+//  - 1-4 movers from the shape library (shapes.h: mug, spray bottle, book, laptop, backpack, jug,
 //    rocking horse, airship, skateboard, surfboard, cardboard box, toy car, teddy, suitcase,
 //    chair; 0.12-1.5 m), each with a motion family (motionFamilyNames()):
 //      drive   along a floor loop, slowing in bends, with stops
@@ -22,7 +22,9 @@
 //    suitcase): they never move.
 //  - Camera families (cameraFamilyNames()): sweep (hand-held, sideways, 1.6-3 m from the
 //    objects), xyz (small translations and rotations about a fixed point, as TUM fr1/xyz),
-//    orbit (around the objects at 1.8-2.8 m). At most 0.4 m/s and 30 deg/s, plus tremor.
+//    orbit (around the objects at 1.5-1.9 m). The wall the camera faces stays within 4.1 m
+//    (the sensor's range is 4.5 m: beyond it a camera sees a floor and little else). At most 0.4
+//    m/s and 30 deg/s, plus tremor.
 //  - Detector imperfections drawn per seed (DetectorSimOptions): misses 5-20 %, false
 //    positives 5-25 % of detection frames, boundary erosion/dilation 2-4 px, shifts 1-3 px,
 //    class confusion 0-8 %, gross spills 0-10 %, partial masks 0-10 %, and for a quarter of the

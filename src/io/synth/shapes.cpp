@@ -202,9 +202,13 @@ SceneObject bottle(int id, double s, const Material& body, const Material& cap) 
   SceneObject o;
   o.id = id;
   o.class_name = "bottle";
-  o.parts.push_back(makeCylinder(0.04 * s, 0.1 * s, at(0, 0, 0.1 * s), body));
-  o.parts.push_back(makeCapsule(0.025 * s, 0.03 * s, at(0, 0, 0.225 * s), body));
-  o.parts.push_back(makeCylinder(0.016 * s, 0.02 * s, at(0, 0, 0.28 * s), cap));
+  // A spray bottle: a flattened body, a neck, and a head with its nozzle and trigger on +x.
+  o.parts.push_back(
+      makeRoundedBox({0.045 * s, 0.028 * s, 0.1 * s}, 0.02 * s, at(0, 0, 0.1 * s), body));
+  o.parts.push_back(makeCylinder(0.016 * s, 0.025 * s, at(0, 0, 0.225 * s), cap));
+  o.parts.push_back(
+      makeRoundedBox({0.04 * s, 0.02 * s, 0.022 * s}, 0.008 * s, at(0.02 * s, 0, 0.27 * s), cap));
+  o.parts.push_back(makeBox({0.008 * s, 0.012 * s, 0.03 * s}, at(0.045 * s, 0, 0.22 * s), cap));
   return o;
 }
 
@@ -233,24 +237,37 @@ SceneObject laptop(int id, double s, const Material& shell, const Material& scre
   return o;
 }
 
-SceneObject ball(int id, double s, const Material& skin) {
+SceneObject backpack(int id, double s, const Material& fabric, const Material& pocket) {
   SceneObject o;
   o.id = id;
-  o.class_name = "sports ball";
-  o.parts.push_back(makeSphere(0.11 * s, at(0, 0, 0), skin));
+  o.class_name = "backpack";
+  o.parts.push_back(
+      makeRoundedBox({0.15 * s, 0.09 * s, 0.2 * s}, 0.05 * s, at(0, 0, 0.2 * s), fabric));
+  o.parts.push_back(
+      makeRoundedBox({0.11 * s, 0.04 * s, 0.09 * s}, 0.03 * s, at(0, -0.11 * s, 0.13 * s), pocket));
+  o.parts.push_back(makeCapsule(0.012 * s, 0.05 * s, at(0, 0, 0.415 * s, 0, kPi / 2, 0), pocket));
+  for (int sx : {-1, 1}) {
+    o.parts.push_back(
+        makeCapsule(0.015 * s, 0.13 * s, at(sx * 0.08 * s, 0.1 * s, 0.2 * s), pocket));
+  }
   return o;
 }
 
-SceneObject vase(int id, double s, const Material& body, bool lying) {
+SceneObject vase(int id, double s, const Material& body) {
   SceneObject o;
   o.id = id;
   o.class_name = "vase";
+  // A jug: a cylinder with a rim, a handle on -x and a spout on +x.
   const double r = 0.1 * s, hz = 0.2 * s;
-  // Standing: origin on the floor under the axis; lying: at the axis, the axis along y.
-  const Eigen::Isometry3d T = lying ? at(0, 0, 0, 0, 0, kPi / 2) : at(0, 0, hz);
-  o.parts.push_back(makeCylinder(r, hz, T, body));
+  o.parts.push_back(makeCylinder(r, hz, at(0, 0, hz), body));
   o.parts.push_back(
-      makeCylinder(r * 1.12, 0.015 * s, T * at(0, 0, hz - 0.015 * s), solid(0.85f, 0.85f, 0.8f)));
+      makeCylinder(r * 1.12, 0.015 * s, at(0, 0, 2 * hz - 0.015 * s), solid(0.85f, 0.85f, 0.8f)));
+  o.parts.push_back(makeCapsule(0.018 * s, 0.1 * s, at(-0.165 * s, 0, 0.23 * s), body));
+  for (double z : {0.13, 0.33}) {
+    o.parts.push_back(
+        makeCapsule(0.016 * s, 0.03 * s, at(-0.13 * s, 0, z * s, 0, kPi / 2, 0), body));
+  }
+  o.parts.push_back(makeCapsule(0.022 * s, 0.1 * s, at(0.16 * s, 0, 0.22 * s, 0, 0.7, 0), body));
   return o;
 }
 

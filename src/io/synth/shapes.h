@@ -56,17 +56,19 @@ SceneObject couch(int id);
 
 /// Mug: cylinder of radius 0.06 s and height 0.12 s with a handle on +x. Class "cup".
 SceneObject mug(int id, double s, const Material& body);
-/// Bottle: body of radius 0.04 s, 0.2 s high, with a neck; 0.3 s in all. Class "bottle".
+/// Spray bottle: a flattened body 0.09 s x 0.056 s x 0.2 s, a neck and a head with nozzle and
+/// trigger on +x; 0.3 s high. Class "bottle".
 SceneObject bottle(int id, double s, const Material& body, const Material& cap);
 /// Book: 0.22 s x 0.16 s x 0.035 s, a cover and a lighter block of pages. Class "book".
 SceneObject book(int id, double s, const Material& cover);
 /// Laptop, open: base 0.34 s x 0.24 s x 0.02 s, screen tilted back by 20 deg. Class "laptop".
 SceneObject laptop(int id, double s, const Material& shell, const Material& screen);
-/// Ball of radius 0.11 s; origin at its centre. Class "sports ball".
-SceneObject ball(int id, double s, const Material& skin);
-/// Vase: a cylinder of radius 0.1 s and height 0.4 s with a rim; class "vase". lying = true
-/// lays it on its side (axis along y; origin at the axis, 0.1 s above the floor): it rolls.
-SceneObject vase(int id, double s, const Material& body, bool lying);
+/// Backpack, 0.3 s x 0.26 s x 0.43 s: a body, a front pocket (-y), a handle and two straps.
+/// Class "backpack".
+SceneObject backpack(int id, double s, const Material& fabric, const Material& pocket);
+/// Jug: a cylinder of radius 0.1 s and height 0.4 s with a rim, a handle on -x and a spout on
+/// +x (no rotational symmetry: its turn about its axis is observable). Class "vase".
+SceneObject vase(int id, double s, const Material& body);
 /// Rocking horse, 0.8 s long, 0.75 s high: body, neck, head and legs on two rockers. The
 /// rockers are arcs of radius kRockerRadius s (approximated by capsules along their chord);
 /// the origin is the rockers' centre of curvature, kRockerRadius s above the floor, so rocking
