@@ -1,5 +1,6 @@
 #include "io/synth/random_scene.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -22,6 +23,12 @@ constexpr double kFps = 30.0;
 constexpr double kCheckHz = 10.0;  // collision checks, samples per second
 constexpr double kKeyHz = 60.0;    // trajectory keys per second
 constexpr int kMaxAttempts = 40;
+// The static scene in view must pin the camera down (normalSpread) on every frame checked
+// (kMinNormalSpread) and on 90 % of them with some margin (kLowNormalSpread). The presets'
+// smallest and 10th percentile: cars 0.007 / 0.013, occlusion 0.012 / 0.018, enter 0.003 /
+// 0.004, room 0.023 / 0.044.
+constexpr double kMinNormalSpread = 0.004;
+constexpr double kLowNormalSpread = 0.01;
 
 enum Family { kDrive, kSpin, kRock, kSwing, kCarry, kTumble, kPush, kFloat, kPass, kFamilies };
 const char* const kFamilyNames[kFamilies] = {"drive",  "spin", "rock",  "swing", "carry",
@@ -649,20 +656,27 @@ CameraRig makeCamera(Rng& rng, Layout* L) {
 
 /// Adds 2-5 pieces along the walls where they keep clear of the stage and the camera.
 void addFurniture(Scene& s, Rng& rng, Layout* L, const Occupant& stage) {
-  const int n = rng.uniformInt(2, 5);
+  const bool orbit = L->camera == "orbit";
+  const int n = rng.uniformInt(3, 6);
   for (int i = 0; i < n; ++i) {
     for (int attempt = 0; attempt < 20; ++attempt) {
       Scene piece;
       const int kind = rng.uniformInt(0, 5);
-      const int wall = rng.uniformInt(0, 2);  // back, left, right
+      // Back, left, right (and front for an orbit). The first two pieces of a camera looking
+      // one way stand where it looks (the back wall, or a side wall near it): with the floor
+      // and the back wall alone, sliding along the wall is not observable in depth.
+      int wall = rng.uniformInt(0, orbit ? 3 : 2);
+      if (!orbit && i == 0) wall = 0;
       double x, y, yaw;
-      if (wall == 0) {
-        x = rng.uniform(-L->room_hx + 0.6, L->room_hx - 0.6);
-        y = L->room_y_hi - 0.5;
-        yaw = 0;
+      if (wall == 0 || wall == 3) {
+        const double reach = !orbit && i < 2 ? std::min(1.2, L->room_hx - 0.6) : L->room_hx - 0.6;
+        x = rng.uniform(-reach, reach);
+        y = wall == 0 ? L->room_y_hi - 0.5 : L->room_y_lo + 0.5;
+        yaw = wall == 0 ? 0 : kPi;
       } else {
         x = (wall == 1 ? -1 : 1) * (L->room_hx - 0.5);
-        y = rng.uniform(L->room_y_lo + 0.6, L->room_y_hi - 0.6);
+        const double lo = !orbit && i < 2 ? L->room_y_hi - 1.5 : L->room_y_lo + 0.6;
+        y = rng.uniform(std::min(lo, L->room_y_hi - 0.6), L->room_y_hi - 0.6);
         yaw = wall == 1 ? -kPi / 2 : kPi / 2;
       }
       switch (kind) {
@@ -705,9 +719,41 @@ void addFurniture(Scene& s, Rng& rng, Layout* L, const Occupant& stage) {
 
 // ---- visibility check -----------------------------------------------------------------------
 
-/// Fraction of the frames (every 6th) each object is in view at 64x48, and the camera's
-/// nearest surface over them (metres).
-void viewCheck(const Scene& scene, int frames, std::vector<double>* visible, double* nearest_m) {
+/// How well the static scene in view pins the camera down: the smallest eigenvalue of the mean
+/// of n n^T over the surface normals of `depth` (CV_32F, NaN = nothing, 4.5 m range), in
+/// [0, 1/3]. Near 0 when all surfaces in view share a direction they are parallel to (a floor
+/// and one wall: sliding along the wall changes no depth).
+double normalSpread(const cv::Mat& depth, const Intrinsics& K) {
+  Eigen::Matrix3d S = Eigen::Matrix3d::Zero();
+  int n = 0;
+  auto point = [&](int u, int v) {
+    const float z = depth.at<float>(v, u);
+    return Eigen::Vector3d((u - K.cx) / K.fx * z, (v - K.cy) / K.fy * z, z);
+  };
+  auto valid = [&](int u, int v) {
+    const float z = depth.at<float>(v, u);
+    return z == z && z > 0.4f && z < 4.5f;
+  };
+  for (int v = 0; v + 1 < depth.rows; ++v) {
+    for (int u = 0; u + 1 < depth.cols; ++u) {
+      if (!valid(u, v) || !valid(u + 1, v) || !valid(u, v + 1)) continue;
+      const Eigen::Vector3d p = point(u, v);
+      const Eigen::Vector3d a = point(u + 1, v) - p, b = point(u, v + 1) - p;
+      // Skip pixels across depth edges.
+      if (a.norm() > 0.05 * p.z() || b.norm() > 0.05 * p.z()) continue;
+      const Eigen::Vector3d normal = a.cross(b).normalized();
+      S += normal * normal.transpose();
+      ++n;
+    }
+  }
+  if (n < 20) return 0.0;
+  return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(S / n).eigenvalues()(0);
+}
+
+/// Fraction of the frames (every 6th) each object is in view at 64x48, the camera's nearest
+/// surface over them (metres) and the normalSpread of the static scene in view per frame.
+void viewCheck(const Scene& scene, int frames, std::vector<double>* visible, double* nearest_m,
+               std::vector<double>* spread) {
   RenderOptions ro;
   ro.width = 64;
   ro.height = 48;
@@ -715,6 +761,9 @@ void viewCheck(const Scene& scene, int frames, std::vector<double>* visible, dou
   const Renderer renderer(ro);
   visible->assign(scene.objects.size(), 0.0);
   *nearest_m = 1e9;
+  spread->clear();
+  Scene statics = scene;
+  statics.objects.clear();
   int checked = 0;
   for (int f = 0; f < frames; f += 6, ++checked) {
     const double t = scene.timeOf(f);
@@ -722,6 +771,9 @@ void viewCheck(const Scene& scene, int frames, std::vector<double>* visible, dou
     for (const auto& o : scene.objects) poses.push_back(o.trajectory.pose(t));
     RenderOutput r;
     renderer.render(scene, scene.camera.pose(t), poses, &r);
+    RenderOutput background;
+    renderer.render(statics, scene.camera.pose(t), {}, &background);
+    spread->push_back(normalSpread(background.depth, renderer.intrinsics()));
     const std::vector<int> counts = instancePixelCounts(r.instance_ids);
     for (size_t k = 0; k < scene.objects.size(); ++k) {
       const size_t id = static_cast<size_t>(scene.objects[k].id);
@@ -940,9 +992,14 @@ Attempt generate(uint64_t seed, int attempt, const RandomSceneOptions& options, 
   // Accept when every object is in view long enough and the camera keeps clear of surfaces.
   std::vector<double> visible;
   double nearest = 0;
-  viewCheck(scene, options.frames, &visible, &nearest);
+  std::vector<double> spread;
+  viewCheck(scene, options.frames, &visible, &nearest, &spread);
   double score = placed_movers == movers ? 1.0 : -1.0;
   if (nearest < 0.35) score = -1.0;
+  std::sort(spread.begin(), spread.end());
+  const double spread_min = spread.empty() ? 0.0 : spread.front();
+  const double spread_p10 = spread.empty() ? 0.0 : spread[spread.size() / 10];
+  score = std::min({score, 10 * (spread_min - kMinNormalSpread), spread_p10 - kLowNormalSpread});
   for (size_t k = 0; k < scene.objects.size(); ++k) {
     const double need = scene.objects[k].motion == "pass" ? 0.35 : 0.6;
     score = std::min(score, visible[k] - need);
