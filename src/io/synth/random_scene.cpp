@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <opencv2/imgproc.hpp>
 #include <optional>
 
 #include "common/error.h"
@@ -161,7 +162,8 @@ struct Layout {
 
 /// Samples a floor position on the stage (where objects act), `clearance` from its edge and, for
 /// the cameras looking one way, at least `min_distance` from the camera line.
-Eigen::Vector2d stagePoint(Rng& rng, const Layout& L, double clearance, double min_distance = 0) {
+Eigen::Vector2d stagePoint(Rng& rng, const Layout& L, double clearance, double min_distance = 0,
+                           double max_distance = 1e9) {
   if (L.camera == "orbit") {
     const double Rs = std::max(0.3, std::min(1.3, L.D - 1.0) - clearance);
     const double r = Rs * std::sqrt(rng.uniform()), a = rng.uniform(0.0, 2 * kPi);
@@ -169,7 +171,7 @@ Eigen::Vector2d stagePoint(Rng& rng, const Layout& L, double clearance, double m
   }
   // Distance from the camera line (y = -D) and the view's half width there (fx 525 at 640).
   const double lo = std::min(L.D + 0.6, std::max({1.0, 0.6 * L.D, min_distance}));
-  const double d = rng.uniform(lo, std::max(lo, L.stage_far_d));
+  const double d = rng.uniform(lo, std::max(lo, std::min(max_distance, L.stage_far_d)));
   const double half = std::max(0.1, 0.5 * d - clearance);
   return {rng.uniform(-half, half), d - L.D};
 }
@@ -325,7 +327,13 @@ bool planMotion(Family family, Kind kind, double s, double rest_z, Rng& rng, con
     m->plan.move(easedDuration(rng.uniform(lo, hi), delta_m.norm(), delta_rad.norm(), lever),
                  delta_m, delta_rad, centre);
   };
-  const Eigen::Vector2d p = stagePoint(rng, L, 0.5 * size, 1.3 * size);
+  // Close enough for its smaller side to make a 48 px box at 640 px (the detection filter).
+  Eigen::Vector3d sides = bounds.sizes();
+  std::sort(sides.data(), sides.data() + 3);
+  const double max_distance = 525.0 / 48.0 * 0.8 * sides[1];
+  if (L.camera != "orbit" && max_distance < std::max(1.0, 0.6 * L.D)) return false;
+  if (L.camera == "orbit" && max_distance < L.D - std::min(1.3, L.D - 1.0)) return false;
+  const Eigen::Vector2d p = stagePoint(rng, L, 0.5 * size, 1.3 * size, max_distance);
   const double yaw0 = rng.uniform(-kPi, kPi);
   switch (family) {
     case kDrive: {
@@ -654,6 +662,45 @@ CameraRig makeCamera(Rng& rng, Layout* L) {
 
 // ---- furniture ----------------------------------------------------------------------------------
 
+/// Pillars standing out of the walls the camera faces (two on the back wall, one on each side
+/// wall; one per wall for an orbit), floor to ceiling: their side faces keep the camera's
+/// sideways motion observable where the room would otherwise show a floor and a flat wall.
+void addPillars(Scene& s, Rng& rng, Layout* L, const Occupant& stage) {
+  const Material plaster = pattern(Texture::kNoise, randomColour(rng, 0.55, 0.85),
+                                   randomColour(rng, 0.45, 0.7), rng.uniform(0.2, 0.5));
+  const double h = 0.5 * L->ceiling + 0.1;
+  std::vector<Primitive> pillars;
+  auto add = [&](double x, double y, double hx, double hy) {
+    std::vector<Primitive> p = {makeBox({hx, hy, h}, at(x, y, h - 0.1), plaster)};
+    const Occupant occ = staticOccupant(p, 0.05);
+    if (collides(occ, stage) || std::any_of(L->occupants.begin(), L->occupants.end(),
+                                            [&](const Occupant& o) { return collides(occ, o); })) {
+      return;
+    }
+    L->occupants.push_back(occ);
+    s.statics.push_back(p[0]);
+  };
+  const bool orbit = L->camera == "orbit";
+  for (int k = 0; k < (orbit ? 1 : 2); ++k) {
+    const double depth = rng.uniform(0.15, 0.3);
+    const double x = (k == 0 ? -1 : 1) * rng.uniform(0.3, std::max(0.35, L->room_hx - 0.6));
+    add(orbit ? rng.uniform(-L->room_hx + 0.5, L->room_hx - 0.5) : x, L->room_y_hi - depth,
+        rng.uniform(0.15, 0.35), depth);
+  }
+  for (int side : {-1, 1}) {
+    const double depth = rng.uniform(0.15, 0.3);
+    const double y =
+        orbit ? rng.uniform(L->room_y_lo + 0.5, L->room_y_hi - 0.5)
+              : rng.uniform(std::max(L->room_y_lo + 0.5, L->room_y_hi - 2.0), L->room_y_hi - 0.4);
+    add(side * (L->room_hx - depth), y, depth, rng.uniform(0.15, 0.35));
+  }
+  if (orbit) {
+    const double depth = rng.uniform(0.15, 0.3);
+    add(rng.uniform(-L->room_hx + 0.5, L->room_hx - 0.5), L->room_y_lo + depth,
+        rng.uniform(0.15, 0.35), depth);
+  }
+}
+
 /// Adds 2-5 pieces along the walls where they keep clear of the stage and the camera.
 void addFurniture(Scene& s, Rng& rng, Layout* L, const Occupant& stage) {
   const bool orbit = L->camera == "orbit";
@@ -720,10 +767,11 @@ void addFurniture(Scene& s, Rng& rng, Layout* L, const Occupant& stage) {
 // ---- visibility check -----------------------------------------------------------------------
 
 /// How well the static scene in view pins the camera down: the smallest eigenvalue of the mean
-/// of n n^T over the surface normals of `depth` (CV_32F, NaN = nothing, 4.5 m range), in
-/// [0, 1/3]. Near 0 when all surfaces in view share a direction they are parallel to (a floor
-/// and one wall: sliding along the wall changes no depth).
-double normalSpread(const cv::Mat& depth, const Intrinsics& K) {
+/// of n n^T over the surface normals of `depth` (CV_32F, NaN = nothing, 4.5 m range) where
+/// `ids` (CV_16U) is 0 (the static scene, objects left out), in [0, 1/3]. Near 0 when all surfaces
+/// in view share a direction they are parallel to (a floor and one wall: sliding along the wall
+/// changes no depth).
+double normalSpread(const cv::Mat& depth, const cv::Mat& ids, const Intrinsics& K) {
   Eigen::Matrix3d S = Eigen::Matrix3d::Zero();
   int n = 0;
   auto point = [&](int u, int v) {
@@ -732,7 +780,7 @@ double normalSpread(const cv::Mat& depth, const Intrinsics& K) {
   };
   auto valid = [&](int u, int v) {
     const float z = depth.at<float>(v, u);
-    return z == z && z > 0.4f && z < 4.5f;
+    return ids.at<uint16_t>(v, u) == 0 && z == z && z > 0.4f && z < 4.5f;
   };
   for (int v = 0; v + 1 < depth.rows; ++v) {
     for (int u = 0; u + 1 < depth.cols; ++u) {
@@ -750,40 +798,42 @@ double normalSpread(const cv::Mat& depth, const Intrinsics& K) {
   return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(S / n).eigenvalues()(0);
 }
 
-/// Fraction of the frames (every 6th) each object is in view at 64x48, the camera's nearest
-/// surface over them (metres) and the normalSpread of the static scene in view per frame.
-void viewCheck(const Scene& scene, int frames, std::vector<double>* visible, double* nearest_m,
+/// Fraction of the frames (every 8th) on which each object is detectable: in view with a box of
+/// at least kMinBoxFraction of the image width on both sides (the paper's 40 px detection filter
+/// at 640 px, with a margin); the camera's nearest surface over them (metres); and the
+/// normalSpread of the static scene in view per frame. Rendered at 96x72.
+void viewCheck(const Scene& scene, int frames, std::vector<double>* detectable, double* nearest_m,
                std::vector<double>* spread) {
+  constexpr double kMinBoxFraction = 48.0 / 640.0;
   RenderOptions ro;
-  ro.width = 64;
-  ro.height = 48;
+  ro.width = 96;
+  ro.height = 72;
   ro.threads = 1;
   const Renderer renderer(ro);
-  visible->assign(scene.objects.size(), 0.0);
+  detectable->assign(scene.objects.size(), 0.0);
   *nearest_m = 1e9;
   spread->clear();
-  Scene statics = scene;
-  statics.objects.clear();
+  const int min_side = static_cast<int>(std::ceil(kMinBoxFraction * ro.width));
+  const int min_pixels = minVisiblePixels(ro.width, ro.height);
   int checked = 0;
-  for (int f = 0; f < frames; f += 6, ++checked) {
+  for (int f = 0; f < frames; f += 8, ++checked) {
     const double t = scene.timeOf(f);
     std::vector<Eigen::Isometry3d> poses;
     for (const auto& o : scene.objects) poses.push_back(o.trajectory.pose(t));
     RenderOutput r;
     renderer.render(scene, scene.camera.pose(t), poses, &r);
-    RenderOutput background;
-    renderer.render(statics, scene.camera.pose(t), {}, &background);
-    spread->push_back(normalSpread(background.depth, renderer.intrinsics()));
-    const std::vector<int> counts = instancePixelCounts(r.instance_ids);
+    spread->push_back(normalSpread(r.depth, r.instance_ids, renderer.intrinsics()));
     for (size_t k = 0; k < scene.objects.size(); ++k) {
-      const size_t id = static_cast<size_t>(scene.objects[k].id);
-      if (id < counts.size() && counts[id] >= 3) (*visible)[k] += 1.0;
+      const cv::Mat mask = r.instance_ids == scene.objects[k].id;
+      if (cv::countNonZero(mask) < min_pixels) continue;
+      const cv::Rect box = cv::boundingRect(mask);
+      if (box.width >= min_side && box.height >= min_side) (*detectable)[k] += 1.0;
     }
     double lo, hi;
     cv::minMaxIdx(r.depth, &lo, &hi, nullptr, nullptr, r.depth == r.depth);
     *nearest_m = std::min(*nearest_m, lo);
   }
-  for (auto& v : *visible) v /= std::max(1, checked);
+  for (auto& v : *detectable) v /= std::max(1, checked);
 }
 
 // ---- the generator ------------------------------------------------------------------------------
@@ -854,6 +904,7 @@ Attempt generate(uint64_t seed, int attempt, const RandomSceneOptions& options, 
     stage.boxes.push_back({Eigen::Vector3d(-0.6 * L.stage_far_d, -L.D, 0),
                            Eigen::Vector3d(0.6 * L.stage_far_d, L.stage_far_d - L.D - 0.3, 2.0)});
   }
+  addPillars(scene, rng, &L, stage);
   addFurniture(scene, rng, &L, stage);
   std::string description = "Room " + std::to_string(2 * L.room_hx).substr(0, 3) + " x " +
                             std::to_string(2 * hy).substr(0, 3) + " m; camera " + L.camera +
@@ -962,7 +1013,10 @@ Attempt generate(uint64_t seed, int attempt, const RandomSceneOptions& options, 
       double rest_z = 0;
       SceneObject o = buildShape(kind, next_id, rng.uniform(0.9, 1.2), rng, &rest_z);
       const Eigen::AlignedBox3d b = objectBounds(o);
-      const Eigen::Vector2d p = stagePoint(rng, L, 0.5 * (b.max() - b.min()).maxCoeff());
+      Eigen::Vector3d sides = b.sizes();
+      std::sort(sides.data(), sides.data() + 3);
+      const Eigen::Vector2d p =
+          stagePoint(rng, L, 0.5 * sides[2], 0.0, 525.0 / 48.0 * 0.8 * sides[1]);
       const Eigen::Isometry3d T = poseAt(p, rest_z, rng.uniform(-kPi, kPi));
       const Occupant occ{{worldBox(b, T)}, 0.08};
       if (!fits(L, occ)) continue;
