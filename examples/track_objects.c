@@ -47,6 +47,8 @@ static const char* stateName(emf_object_state state) {
       return "deleted";
     case EMF_OBJECT_LOST:
       return "lost";
+    case EMF_OBJECT_DORMANT:
+      return "dormant";
   }
   return "unknown";
 }

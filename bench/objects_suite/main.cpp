@@ -13,6 +13,7 @@
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -41,7 +42,8 @@ const char* kUsage =
     "  Runs emf on the generated scenes synth:random?seed=S (seeds S = first-seed .. + N - 1,\n"
     "  or the list) and scores the objects against the ground truth.\n"
     "  --seeds N         scenes (default 16 at 320x240 and below, 6 above)\n"
-    "  --size WxH        image size (default 320x240; 320 and below map at 2 cm)\n"
+    "  --size WxH        image size (default 320x240); the background is 10.24 m across,\n"
+    "                    centred on the first camera, at 2 cm (320 and below) or 1 cm\n"
     "  --frames N        frames per scene (default 600)\n"
     "  --scene QUERY     more synth:random query keys, e.g. 'movers=2&camera=orbit'\n"
     "  --config, --set   the configuration under test ('default' column)\n"
@@ -122,11 +124,18 @@ struct Variant {
   emf::Config config;
 };
 
-/// The map at 2 cm for small images (as the tests and bench/objects_bench.sh run them).
+/// The background for the generated rooms, in every configuration compared: 10.24 m across
+/// with the first camera at its centre (an orbiting camera sees the walls behind its start,
+/// which the default 5.12 m volume ahead of it leaves out), 2 cm voxels at 320 px and below (as
+/// the tests and bench/objects_bench.sh), 1 cm above.
 void sizeDefaults(emf::Config* c, int width) {
+  c->map.initial_camera_face_offset = 0.0;
   if (width <= 320) {
     c->map.background_voxel_m = 0.02f;
-    c->map.background_resolution = 256;
+    c->map.background_resolution = 512;
+  } else {
+    c->map.background_voxel_m = 0.01f;
+    c->map.background_resolution = 1024;
   }
 }
 
@@ -232,7 +241,13 @@ std::string num(double v, const char* fmt) {
 }
 
 /// Everything a configuration gathered over the seeds.
+/// One motion family's moving objects (the first family of each object's motion).
+struct FamilyTotals {
+  std::vector<double> ate_cm, coverage, estimates;
+};
+
 struct Totals {
+  std::map<std::string, FamilyTotals> families;
   std::vector<double> camera_ate_cm, moving_ate_cm, moving_coverage, moving_union_coverage;
   std::vector<double> estimates_per_object, spurious, lost_frames, ms, ms_p90;
   int recreated_in_view = 0, id_switches = 0, still_split = 0, objects = 0, moving = 0;
@@ -249,6 +264,10 @@ struct Totals {
         moving_ate_cm.push_back(o.ate_m ? *o.ate_m * 100 : INFINITY);
         moving_coverage.push_back(o.coverage * 100);
         moving_union_coverage.push_back(o.union_coverage * 100);
+        FamilyTotals& f = families[o.motion.substr(0, o.motion.find('+'))];
+        f.ate_cm.push_back(moving_ate_cm.back());
+        f.coverage.push_back(o.coverage * 100);
+        f.estimates.push_back(o.estimates);
       } else if (o.estimates > 1) {
         ++still_split;
       }
@@ -433,6 +452,32 @@ int main(int argc, char** argv) {
     row("objects counted (moving)", [&](const Totals& t) {
       return std::to_string(t.objects) + " (" + std::to_string(t.moving) + ")";
     });
+    // Per motion family, over the moving objects of all seeds.
+    std::set<std::string> family_names;
+    for (const auto& t : totals) {
+      for (const auto& [name, f] : t.families) family_names.insert(name);
+    }
+    std::printf(
+        "\nper motion family: objects, ATE cm median [worst], coverage %% median, "
+        "estimates mean\n");
+    for (const auto& name : family_names) {
+      std::printf("  %-8s", name.c_str());
+      for (size_t c = 0; c < configs.size(); ++c) {
+        const auto it = totals[c].families.find(name);
+        if (it == totals[c].families.end()) {
+          std::printf(" | %-36s", "-");
+          continue;
+        }
+        const FamilyTotals& f = it->second;
+        char cell[96];
+        std::snprintf(
+            cell, sizeof(cell), "%2zu: %s [%s] %s%% x%s", f.ate_cm.size(),
+            num(quantile(f.ate_cm, 0.5), "%.2f").c_str(), num(worstHigh(f.ate_cm), "%.1f").c_str(),
+            num(quantile(f.coverage, 0.5), "%.0f").c_str(), num(mean(f.estimates), "%.2f").c_str());
+        std::printf(" | %-36s", cell);
+      }
+      std::printf("\n");
+    }
     for (size_t c = 0; c < configs.size(); ++c) {
       const Totals& t = totals[c];
       std::printf(

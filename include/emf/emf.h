@@ -114,7 +114,11 @@ typedef enum emf_object_state {
                                  (objects.leaving_fraction): not tracked, its pose held still
                                  in the world, not integrated */
   EMF_OBJECT_DELETED = 3,   /**< deleted in this frame (reported once) */
-  EMF_OBJECT_LOST = 4       /**< tracking of the object failed in this frame: pose kept */
+  EMF_OBJECT_LOST = 4,      /**< tracking of the object failed in this frame: pose kept */
+  EMF_OBJECT_DORMANT = 5    /**< retired by a rule (lost, left the view, ...) but its model kept
+                                 for objects.reidentify_frames: a later detection that fits it
+                                 re-attaches it with this id; reported DELETED when that ends.
+                                 Not tracked, integrated or rendered; pose as last tracked */
 } emf_object_state;
 
 /** One object. In arrays the caller sets objects[0].struct_size; emf uses it as the element

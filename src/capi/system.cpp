@@ -36,6 +36,8 @@ emf_object_state toCState(pipeline::ObjectState state) {
       return EMF_OBJECT_INVISIBLE;
     case pipeline::ObjectState::kDeleted:
       return EMF_OBJECT_DELETED;
+    case pipeline::ObjectState::kDormant:
+      return EMF_OBJECT_DORMANT;
   }
   return EMF_OBJECT_TRACKED;
 }

@@ -119,6 +119,16 @@ struct ObjectOptions {
   /// is inside the image (at least leaving_fraction).
   double in_view_again_fraction = 0.6;
   int max_objects = 8;
+  /// Re-identification (not in the paper, which deletes and starts over): an object deleted by
+  /// a rule (lost, invisible, unassociated, hidden, non-existent) keeps its model, dormant, for
+  /// this many frames. A detection that would create a new object is first fitted to the lost
+  /// and the dormant objects' models (from their last pose and from the detection's centre at
+  /// 12 headings); one that fits (reidentify_min_inliers) re-attaches to that object with its
+  /// id and trajectory. 0 = delete at once (the paper).
+  int reidentify_frames = 300;
+  /// Share of a detection's points within the inlier band of a model (after the fit, with at
+  /// least half of them on its observed surface) for the detection to re-attach to it.
+  double reidentify_min_inliers = 0.8;
   /// An object is not created when its first integration leaves less than this fraction of the
   /// voxel pool free: the background (and the objects' growth) keep room in a fixed pool.
   double min_free_pool_fraction = 0.25;
@@ -250,6 +260,12 @@ struct ObjectOptions {
               "with filter_depth off: the objects' hole margin (see preprocess.hole_margin_px)");
     b.integer("max_objects", max_objects, 0, 64, "",
               "object volumes alive at once (sizes the per-frame buffers)");
+    b.integer("reidentify_frames", reidentify_frames, 0, 100000, "frames",
+              "a deleted object's model is kept this long for a later detection that fits it to "
+              "re-attach (same id; 0 = delete at once, the paper)");
+    b.real("reidentify_min_inliers", reidentify_min_inliers, 0.0, 1.0, "",
+           "share of a detection's points within the inlier band of a model for it to "
+           "re-attach");
     b.real("min_free_pool_fraction", min_free_pool_fraction, 0.0, 1.0, "",
            "no object is created when it would leave less than this fraction of the voxel pool "
            "free (room for the background; 0 = off)");

@@ -165,7 +165,10 @@ void SlamSystem::integrateAll() {
     }
   }
   for (TrackedObject& o : objects_) {
-    if (o.state != ObjectState::kTracked || !have_q || o.first_frame == frames_) continue;
+    if (o.state != ObjectState::kTracked || !have_q || o.first_frame == frames_ ||
+        o.reattached_frame == frames_) {
+      continue;
+    }
     map::IntegrationInput oi = in;
     oi.weights = &estep_.q(o.e_step_slot);
     const auto fg = pending_fg_.find(o.id);
@@ -334,6 +337,10 @@ void SlamSystem::createObjects() {
   for (const io::Detection& detected : unmatched_) {
     io::Detection d = detected;  // the part of the mask the object is built from
     d.mask = em::creationMask(detected.mask, vertex, config_.objects);
+    // A lost or dormant object this detection fits is the same object: re-attach it.
+    if (!objects_.empty() || !dormant_.empty()) {
+      if (reattach(d, maskedPoints(vertex, d.mask))) continue;
+    }
     if (!createObject(d, vertex)) continue;
     if (created_mask_.empty()) created_mask_ = cv::Mat::zeros(d.mask.size(), CV_32F);
     created_mask_ = cv::max(created_mask_, d.mask);
@@ -456,7 +463,8 @@ void SlamSystem::checkVisibility(const cv::Mat& depth) {
   }
   for (size_t k = objects_.size(); k-- > 0;) {
     TrackedObject& o = objects_[k];
-    if (o.first_frame == frames_) continue;  // created this frame
+    // Created or re-attached this frame: its association map is not its own yet.
+    if (o.first_frame == frames_ || o.reattached_frame == frames_) continue;
     if (em::lostTooLong(o.lost_frames, opt)) {
       deleteObject(k, "lost: not tracked on " + std::to_string(o.lost_frames) +
                           " frames in a row (> objects.max_lost_frames " +
@@ -523,7 +531,26 @@ void SlamSystem::checkVisibility(const cv::Mat& depth) {
 
 void SlamSystem::deleteObject(size_t i, const std::string& reason) {
   TrackedObject& o = objects_[i];
+  if (config_.objects.reidentify_frames > 0 && o.rendered) {
+    // Dormant: the model stays for a detection that fits it (object_reid.cpp).
+    logInfo("frame ", frames_, ": object ", o.id, " ('", o.class_name, "') dormant: ", reason);
+    o.state = ObjectState::kDormant;
+    o.dormant_since = frames_;
+    o.dormant_reason = reason;
+    o.hidden = o.leaving = false;
+    o.hidden_frames = o.lost_frames = 0;
+    dormant_.push_back(std::move(o));
+    objects_.erase(objects_.begin() + static_cast<std::ptrdiff_t>(i));
+    return;
+  }
+  eraseObject(o, reason);
+  objects_.erase(objects_.begin() + static_cast<std::ptrdiff_t>(i));
+}
+
+void SlamSystem::eraseObject(TrackedObject& o, const std::string& reason) {
   if (deletion_hook_) deletion_hook_(o);
+  object_tracker_.forget(o.volume->index().get());
+  reid_tracker_.forget(o.volume->index().get());
   ObjectOutcome d;
   d.id = o.id;
   d.class_name = o.class_name;
@@ -537,22 +564,24 @@ void SlamSystem::deleteObject(size_t i, const std::string& reason) {
   d.deleted_reason = reason;
   deleted_now_.push_back(d);
   logInfo("frame ", frames_, ": object ", o.id, " ('", o.class_name, "') deleted: ", reason);
-  objects_.erase(objects_.begin() + static_cast<std::ptrdiff_t>(i));
 }
 
 void SlamSystem::fillObjectOutcomes(FrameOutcome* out) const {
-  for (const auto& o : objects_) {
-    ObjectOutcome r;
-    r.id = o.id;
-    r.class_name = o.class_name;
-    r.state = o.state;
-    r.T_world_object = o.volume->T_world_initial();
-    r.T_object_camera = r.T_world_object.inverse() * T_world_camera_;
-    r.existence = o.existence.probability();
-    r.first_frame = o.first_frame;
-    r.last_frame = o.last_frame;
-    r.rendered = o.rendered;
-    out->objects.push_back(r);
+  for (const auto* list : {&objects_, &dormant_}) {
+    for (const auto& o : *list) {
+      ObjectOutcome r;
+      r.id = o.id;
+      r.class_name = o.class_name;
+      r.state = o.state;
+      if (o.state == ObjectState::kDormant) r.deleted_reason = o.dormant_reason;
+      r.T_world_object = o.volume->T_world_initial();
+      r.T_object_camera = r.T_world_object.inverse() * T_world_camera_;
+      r.existence = o.existence.probability();
+      r.first_frame = o.first_frame;
+      r.last_frame = o.last_frame;
+      r.rendered = o.rendered;
+      out->objects.push_back(r);
+    }
   }
   for (const auto& d : deleted_now_) out->objects.push_back(d);
   std::sort(out->objects.begin(), out->objects.end(),

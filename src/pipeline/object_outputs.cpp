@@ -142,6 +142,9 @@ void ObjectOutputs::add(const FrameOutcome& outcome) {
       case ObjectState::kInvisible:
         ++s.frames_invisible;
         break;
+      case ObjectState::kDormant:
+        ++s.frames_dormant;
+        break;
       case ObjectState::kDeleted:
         s.deleted = true;
         s.deleted_frame = outcome.index;

@@ -32,7 +32,7 @@ struct ObjectSummary {
   std::string class_name;
   int64_t first_frame = -1, last_frame = -1;  // frames (SlamSystem indices) tracked; -1 = never
   double first_timestamp = 0, last_timestamp = 0;  // seconds, of those frames
-  int64_t frames_tracked = 0, frames_lost = 0, frames_invisible = 0;
+  int64_t frames_tracked = 0, frames_lost = 0, frames_invisible = 0, frames_dormant = 0;
   bool deleted = false;        // false: alive at the end of the run
   int64_t deleted_frame = -1;  // frame in which it was deleted
   double deleted_timestamp = 0;

@@ -35,6 +35,7 @@ nlohmann::json objectSummariesJson(const std::vector<ObjectSummary>& objects) {
     j["frames_tracked"] = o.frames_tracked;
     j["frames_lost"] = o.frames_lost;
     j["frames_invisible"] = o.frames_invisible;
+    j["frames_dormant"] = o.frames_dormant;
     j["state"] = o.deleted ? "deleted" : "alive";
     if (o.deleted) {
       j["deleted_frame"] = o.deleted_frame;

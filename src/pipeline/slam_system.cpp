@@ -46,6 +46,17 @@ track::TrackOptions objectTrackOptions(const Config& config, int image_width) {
   return o;
 }
 
+track::TrackOptions reidTrackOptions(const Config& config, int image_width) {
+  track::TrackOptions o = objectTrackOptions(config, image_width);
+  // A fit starts from a guess (a heading step, the detection's centroid): how far it moves says
+  // nothing; the fit is judged by its inliers and overlap (object_reid.cpp). The motion prior
+  // would pull towards the guess.
+  o.max_motion_m = 100.0;
+  o.max_motion_deg = 180.0;
+  o.prior_rotation_weight = 0.0;
+  return o;
+}
+
 track::PreprocessOptions objectPreprocessOptions(const Config& config) {
   track::PreprocessOptions o = config.preprocess;
   if (!config.objects.filter_depth) {
@@ -70,6 +81,8 @@ const char* objectStateName(ObjectState state) {
       return "invisible";
     case ObjectState::kDeleted:
       return "deleted";
+    case ObjectState::kDormant:
+      return "dormant";
   }
   return "?";
 }
@@ -102,6 +115,8 @@ SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrins
       tracker_(ctx, config.track, intrinsics.width, intrinsics.height),
       object_tracker_(ctx, objectTrackOptions(config, intrinsics.width), intrinsics.width,
                       intrinsics.height),
+      reid_tracker_(ctx, reidTrackOptions(config, intrinsics.width), intrinsics.width,
+                    intrinsics.height),
       estep_(ctx, config.em, intrinsics.width, intrinsics.height, 1 + config.objects.max_objects),
       raycaster_(ctx, config.map, intrinsics.width, intrinsics.height),
       timer_(stageNames(), 4096),
@@ -151,6 +166,7 @@ SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrins
                              static_cast<size_t>(intrinsics.height);
   fg_mask_ = ctx.buffer(CL_MEM_READ_ONLY, image_bytes);
   new_weights_ = ctx.buffer(CL_MEM_READ_ONLY, image_bytes);
+  reid_q_ = ctx.buffer(CL_MEM_READ_ONLY, image_bytes);
   const double index_mib = static_cast<double>(background_->indexBytes()) / (1 << 20);
   logInfo("background volume: ", spec.dims_blocks.x() * map::kBlockSize, "^3 voxels of ",
           spec.voxel_size_m * 100, " cm (block index ", index_mib, " MiB); pool ",
@@ -271,6 +287,7 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
       ScopedStage s(timer_, "objects");
       if (out.detector_ran) deleteByExistence();
       if (!objects_.empty()) checkVisibility(frame.depth);
+      expireDormant();
     }
   }
   fillObjectOutcomes(&out);
@@ -314,8 +331,10 @@ std::vector<ObjectOutcome> SlamSystem::objects() const {
 
 const map::Volume* SlamSystem::volume(int id) const {
   if (id == 0) return background_.get();
-  for (const auto& o : objects_) {
-    if (o.id == id) return o.volume.get();
+  for (const auto* list : {&objects_, &dormant_}) {
+    for (const auto& o : *list) {
+      if (o.id == id) return o.volume.get();
+    }
   }
   return nullptr;
 }

@@ -39,6 +39,8 @@ enum class ObjectState {
                // the view (objects.leaving_fraction): not tracked, pose held still in the world,
                // not integrated
   kDeleted,    // deleted in this frame (reported once, then gone)
+  kDormant,    // deleted by a rule but its model kept (objects.reidentify_frames): not tracked,
+               // integrated or rendered; a detection that fits it re-attaches it
 };
 const char* objectStateName(ObjectState state);
 
@@ -54,7 +56,7 @@ struct ObjectOutcome {
   double existence = 1.0;                                             // Ex / (Ex + NonEx)
   int64_t first_frame = 0, last_frame = 0;  // frames (SlamSystem indices) tracked
   bool rendered = true;                     // false for people (tracked, never rendered)
-  std::string deleted_reason;               // set with kDeleted
+  std::string deleted_reason;               // set with kDeleted, and with kDormant: why
 };
 
 /// How one detection of a frame was matched to the objects' ray-cast masks.
@@ -90,6 +92,10 @@ track::PreprocessOptions objectPreprocessOptions(const Config& config);
 /// (scaled from 640x480 to an image `image_width` pixels wide).
 track::TrackOptions objectTrackOptions(const Config& config, int image_width);
 
+/// The tracking options of the re-identification fits: objectTrackOptions without the motion
+/// rules and the rotation prior (a fit starts from a guess).
+track::TrackOptions reidTrackOptions(const Config& config, int image_width);
+
 /// The device view of a volume that tracking and the E-step read.
 map::VolumeDeviceView deviceView(const map::Volume& volume);
 
@@ -118,6 +124,12 @@ struct TrackedObject {
   /// Where the object claims pixels in the E-step (objects.claim_region), in its frame at
   /// creation (volume->T_world_initial(): growth does not move it). Empty: the whole volume.
   Eigen::AlignedBox3d claim_initial;
+  /// Dormant (objects.reidentify_frames): since which frame, and the rule that retired it.
+  int64_t dormant_since = -1;
+  std::string dormant_reason;
+  /// The frame a detection re-attached it (its E-step association of that frame is not its
+  /// own: it is not integrated or judged by its association then).
+  int64_t reattached_frame = -1;
 };
 
 class SlamSystem {
@@ -153,9 +165,10 @@ class SlamSystem {
   const FrameCounters& counters() const { return counters_; }
   /// The detector's counters (plugin empty when none is configured).
   DetectorStats detectorStats() const;
-  /// Objects alive now (as in the last FrameOutcome, without the deleted ones).
+  /// Objects alive now, dormant ones included (as in the last FrameOutcome, without the deleted
+  /// ones).
   std::vector<ObjectOutcome> objects() const;
-  /// The volume of `id` (0 = background), or nullptr when no such object is alive.
+  /// The volume of `id` (0 = background), or nullptr when no such object is alive or dormant.
   const map::Volume* volume(int id) const;
   /// What a ray cast of the current map renders (background id 0 first, then every rendered
   /// object with its id), for outputs and the C API's render call.
@@ -212,7 +225,17 @@ class SlamSystem {
   // After integration: the visibility, association, lost and hidden rules on each object's own
   // ray cast at objects.visibility_width against `depth` (the frame's raw depth).
   void checkVisibility(const cv::Mat& depth);
+  // Retires active object i for `reason`: dormant with objects.reidentify_frames, else deleted.
   void deleteObject(size_t i, const std::string& reason);
+  // Deletes an object for good (the deletion hook, the outcome, the trackers' state).
+  void eraseObject(TrackedObject& o, const std::string& reason);
+  /// Re-identification (object_reid.cpp): fits the detection (its creation mask and points,
+  /// camera frame) to the lost and the dormant objects' models; true when one fitted and was
+  /// re-attached at the fitted pose.
+  bool reattach(const io::Detection& d, const std::vector<Eigen::Vector3d>& points_camera);
+  /// Dormant objects past objects.reidentify_frames, or beyond max_objects of them, or (oldest
+  /// first) while the pool has less than objects.min_free_pool_fraction free, are deleted.
+  void expireDormant();
   void fillObjectOutcomes(FrameOutcome* out) const;
   cv::Mat downloadVertexMap() const;  // of objectVertexMap()
   cl_mem objectVertexMap() const;     // what the E-step and the objects use
@@ -226,13 +249,16 @@ class SlamSystem {
   track::Preprocessor object_preprocessor_;  // objects.filter_depth off: their own light filter
   track::Tracker tracker_;
   track::Tracker object_tracker_;  // objectTrackOptions(config, width)
+  track::Tracker reid_tracker_;    // the re-identification fits (their own lost state)
   em::EStep estep_;
   map::RayCaster raycaster_;
   cl::MemHandle fg_mask_;      // p_fg of the matched detection per pixel (count updates)
   cl::MemHandle new_weights_;  // mask probability of a new object (its first integration)
   std::vector<TrackedObject> objects_;
-  std::map<int, cv::Mat> pending_fg_;  // id -> detection p_fg (CV_32F, NaN = no update)
-  std::vector<int> estep_ids_;         // volume ids of the last E-step (empty: none this frame)
+  std::vector<TrackedObject> dormant_;  // oldest first (objects.reidentify_frames)
+  cl::MemHandle reid_q_;                // a detection's mask as the fits' weights
+  std::map<int, cv::Mat> pending_fg_;   // id -> detection p_fg (CV_32F, NaN = no update)
+  std::vector<int> estep_ids_;          // volume ids of the last E-step (empty: none this frame)
   cv::Mat created_mask_;  // union of the masks of objects created this frame (or empty)
   std::vector<io::Detection> unmatched_;    // this frame's detections that matched nothing
   std::vector<ObjectOutcome> deleted_now_;  // objects deleted in this frame

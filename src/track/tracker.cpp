@@ -607,6 +607,12 @@ double Tracker::recoveryInlierRatio(cl_mem volume_index) const {
   return std::min(options_.recovery_min_inlier_ratio, t->second - kRecoveryMargin);
 }
 
+void Tracker::forget(cl_mem volume_index) {
+  lost_volumes_.erase(std::remove(lost_volumes_.begin(), lost_volumes_.end(), volume_index),
+                      lost_volumes_.end());
+  typical_inliers_.erase(volume_index);
+}
+
 bool Tracker::recovering(cl_mem volume_index) const {
   return std::find(lost_volumes_.begin(), lost_volumes_.end(), volume_index) != lost_volumes_.end();
 }

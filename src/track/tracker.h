@@ -169,6 +169,10 @@ class Tracker {
 
   /// True when the last track() call on the volume with this index buffer was lost.
   bool recovering(cl_mem volume_index) const;
+  /// Drops what the tracker remembers of the volume with this index buffer (lost state, typical
+  /// inlier ratio): call when the volume is freed (a new one may get the same buffer) or when
+  /// its next call must not count as a recovery (a pose found by other means).
+  void forget(cl_mem volume_index);
   /// Inlier ratio a recovering call on the volume must reach: recovery_min_inlier_ratio, at
   /// most the volume's typical (running) inlier ratio minus a margin.
   double recoveryInlierRatio(cl_mem volume_index) const;

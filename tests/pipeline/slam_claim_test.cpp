@@ -56,7 +56,9 @@ ChairRun runChair(bool claim_region) {
         first = ob.T_world_object * centre_in_object;
       }
       if (ob.id != chair) continue;
-      if (ob.state == ObjectState::kDeleted) run.deleted = ob.deleted_reason;
+      if (ob.state == ObjectState::kDeleted || ob.state == ObjectState::kDormant) {
+        run.deleted = ob.deleted_reason;  // retired by a rule (dormant or deleted)
+      }
       if (ob.state != ObjectState::kTracked || ob.last_frame != o.index) continue;
       ++run.tracked;
       const double offset = (ob.T_world_object * centre_in_object - first).norm();

@@ -75,7 +75,8 @@ BoxRun runScene(double leaving_fraction) {
     if (out.lost) ++run.lost_frames;
     for (const ObjectOutcome& o : out.objects) {
       if (o.id != kBoxId) continue;
-      if (o.state == ObjectState::kDeleted) {
+      // Retired by a rule: dormant (objects.reidentify_frames) or deleted.
+      if (o.state == ObjectState::kDeleted || o.state == ObjectState::kDormant) {
         run.deleted_frame = static_cast<int>(f.index);
         run.deleted_reason = o.deleted_reason;
       }

@@ -95,9 +95,10 @@ BoxRun runScene(double hidden_fraction, uint64_t seed = 1) {
     Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
     for (const ObjectOutcome& o : out.objects) {
       if (o.id != kBoxId) continue;
-      state = o.state;
+      // Retired by a rule: dormant (objects.reidentify_frames) counts as deleted here.
+      state = o.state == ObjectState::kDormant ? ObjectState::kDeleted : o.state;
       T = o.T_world_object;
-      if (o.state == ObjectState::kDeleted && run.deleted_frame < 0) {
+      if (state == ObjectState::kDeleted && run.deleted_frame < 0) {
         run.deleted_frame = static_cast<int>(f.index);
         run.deleted_reason = o.deleted_reason;
       }

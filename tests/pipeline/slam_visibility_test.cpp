@@ -68,7 +68,11 @@ Deletion runScene(int visibility_width, int* lost_frames) {
     const FrameOutcome out = slam.process(f, f.index == 0 ? &dets : nullptr);
     if (out.lost) ++*lost_frames;
     for (const ObjectOutcome& o : out.objects) {
-      if (o.id == kObjectId && o.state == ObjectState::kDeleted) d = {f.index, o.deleted_reason};
+      // Retired by the rule: dormant (objects.reidentify_frames) or deleted.
+      if (o.id == kObjectId &&
+          (o.state == ObjectState::kDeleted || o.state == ObjectState::kDormant)) {
+        d = {f.index, o.deleted_reason};
+      }
     }
     if (d.frame >= 0) break;
   }

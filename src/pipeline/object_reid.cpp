@@ -1,0 +1,230 @@
+// Re-identification of SlamSystem (beyond the paper, which deletes an object and starts over):
+// an object retired by a rule stays dormant with its model (objects.reidentify_frames); a
+// detection that would create a new object is first fitted to the models of the live objects
+// whose pose is stale (lost, or held as hidden or leaving) and of the dormant ones of its class,
+// and one that fits re-attaches to that object, which keeps its id and trajectory.
+//
+// The fit: the detection's mask is the association map (q = 1 on its pixels) and the object
+// tracker aligns the frame's points to the model from several starting poses (T_world_initial
+// candidates): the object's last pose, and the last pose turned about the vertical through the
+// model's centre by 0, 30, .., 330 deg and moved so that the model's rendered points have the
+// detection's centroid. The best fit (inliers x points on the model) counts when its inlier
+// share reaches objects.reidentify_min_inliers, at least half of the detection's points landed
+// on the model's observed surface and the model's rendered mask overlaps the detection (IoU
+// >= kMinMaskIoU).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "common/log.h"
+#include "pipeline/slam_system.h"
+
+namespace emf::pipeline {
+namespace {
+
+constexpr double kPi = 3.141592653589793;
+constexpr int kHeadings = 12;              // starting headings about the vertical, 30 deg apart
+constexpr double kMinValidFraction = 0.5;  // of the detection's points on the observed model
+constexpr double kMinMaskIoU = 0.3;        // rendered model mask vs detection mask
+constexpr float kInside = 0.5f;            // mask threshold
+constexpr double kSameFit = 0.05;          // fits whose scores differ by less are alike
+
+Eigen::Vector3d centroid(const std::vector<Eigen::Vector3d>& points) {
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (const auto& p : points) c += p;
+  return points.empty() ? c : c / static_cast<double>(points.size());
+}
+
+/// The object's centre in its frame at creation: its claim region's, or its volume's.
+Eigen::Vector3d modelCentre(const TrackedObject& o) {
+  if (!o.claim_initial.isEmpty()) return o.claim_initial.center();
+  const map::Volume& v = *o.volume;
+  return v.T_volume_initial().inverse() * (v.spec().extentM().cast<double>() / 2.0);
+}
+
+}  // namespace
+
+bool SlamSystem::reattach(const io::Detection& d,
+                          const std::vector<Eigen::Vector3d>& points_camera) {
+  const em::ObjectOptions& opt = config_.objects;
+  if (opt.reidentify_frames <= 0 || points_camera.size() < 10) return false;
+  const Eigen::Vector3d det_camera = centroid(points_camera);
+  const Eigen::Vector3d det_world = T_world_camera_ * det_camera;
+  // The detection's extent, to skip models of another size.
+  Eigen::AlignedBox3d det_box;
+  for (const auto& p : points_camera) det_box.extend(p);
+  const double det_size = det_box.sizes().maxCoeff();
+  const cv::Mat mask = d.mask.isContinuous() ? d.mask : d.mask.clone();
+  ctx_.write(reid_q_, mask.data, mask.total() * sizeof(float));
+  const cv::Mat det_binary = mask > kInside;
+
+  struct Candidate {
+    TrackedObject* object;
+    bool dormant;
+  };
+  std::vector<Candidate> candidates;
+  // Live objects whose pose is stale: lost, or held (hidden, leaving the view) while the object
+  // may have moved on. The detector may confuse their class: geometry decides.
+  for (auto& o : objects_) {
+    if ((o.state == ObjectState::kLost || o.state == ObjectState::kInvisible) && o.rendered) {
+      candidates.push_back({&o, false});
+    }
+  }
+  // Dormant objects of the detection's class, most recent first, into a free slot only
+  // (objects.max_objects).
+  if (static_cast<int>(objects_.size()) < opt.max_objects) {
+    for (auto it = dormant_.rbegin(); it != dormant_.rend(); ++it) {
+      if (it->class_name == d.class_name) candidates.push_back({&*it, true});
+    }
+  }
+
+  struct Best {
+    TrackedObject* object = nullptr;
+    bool dormant = false;
+    Eigen::Isometry3d T_volume_camera = Eigen::Isometry3d::Identity();
+    double score = 0, inliers = 0, iou = 0;
+    double turn = 0;  // rotation from the object's last pose, radians
+  } best;
+  for (const Candidate& c : candidates) {
+    TrackedObject& o = *c.object;
+    map::Volume& volume = *o.volume;
+    const double model_size = volume.spec().extentM().maxCoeff() / std::max(1.0, opt.padding);
+    if (det_size > 2.5 * model_size || det_size < 0.25 * model_size) continue;
+    const Eigen::Isometry3d T_world_volume_before = volume.T_world_volume();
+    const Eigen::Isometry3d T_initial_volume = volume.T_volume_initial().inverse();
+    const Eigen::Isometry3d T_world_initial = volume.T_world_initial();
+    const Eigen::Vector3d centre_initial = modelCentre(o);
+    const Eigen::Vector3d centre_world = T_world_initial * centre_initial;
+    std::vector<Eigen::Isometry3d> starts;
+    starts.push_back(T_world_initial);  // where it was
+    for (int k = 0; k < kHeadings; ++k) {
+      Eigen::Isometry3d turn = Eigen::Isometry3d::Identity();
+      turn.linear() =
+          Eigen::AngleAxisd(2 * kPi * k / kHeadings, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      turn.translation() = centre_world - turn.linear() * centre_world;
+      Eigen::Isometry3d start = turn * T_world_initial;
+      start.pretranslate(det_world - centre_world);
+      starts.push_back(start);
+    }
+    const map::VolumeDeviceView view = deviceView(volume);
+    for (size_t s = 0; s < starts.size(); ++s) {
+      Eigen::Isometry3d start = starts[s];
+      if (s > 0) {
+        // Move the model so that its rendered points' centroid is the detection's.
+        volume.setPose(start * T_initial_volume);
+        raycaster_.render({{&volume, o.id, 0.0f}}, visibility_k_, T_world_camera_);
+        cv::Mat depth;
+        raycaster_.download(&depth, nullptr, nullptr);
+        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        int n = 0;
+        for (int v = 0; v < depth.rows; ++v) {
+          const float* z = depth.ptr<float>(v);
+          for (int u = 0; u < depth.cols; ++u) {
+            if (!(z[u] > 0.0f)) continue;
+            sum += Eigen::Vector3d((u - visibility_k_.cx) / visibility_k_.fx * z[u],
+                                   (v - visibility_k_.cy) / visibility_k_.fy * z[u], z[u]);
+            ++n;
+          }
+        }
+        if (n < 10) continue;
+        start.pretranslate(T_world_camera_.linear() * (det_camera - sum / n));
+      }
+      const Eigen::Isometry3d T_volume_camera =
+          (start * T_initial_volume).inverse() * T_world_camera_;
+      const track::PixelRect roi = track::volumeImageBounds(
+          (view.dims_blocks.cast<double>() * map::kBlockSize) * view.voxel_size_m, T_volume_camera,
+          intrinsics_);
+      reid_tracker_.forget(view.index);
+      const track::TrackResult r =
+          reid_tracker_.track(view, objectVertexMap(), reid_q_.get(), T_volume_camera, &roi);
+      logDebug("frame ", frames_, ": re-identification of object ", o.id, " from start ", s, ": ",
+               r.lost ? "lost (" + r.loss_reason + ")" : std::string("fitted"), ", inliers ",
+               r.inlier_ratio, ", on the model ", r.valid_fraction);
+      if (r.lost || r.valid_fraction < kMinValidFraction) continue;
+      const double score = r.inlier_ratio * r.valid_fraction;
+      // Symmetric shapes fit as well turned (a box by 90 or 180 deg, a car front to back):
+      // of the fits about as good as the best, the one turned least from the last pose wins.
+      const Eigen::Isometry3d T_world_initial_fit =
+          T_world_camera_ * r.T_volume_camera.inverse() * volume.T_volume_initial();
+      const double turn =
+          Eigen::AngleAxisd(T_world_initial.linear().transpose() * T_world_initial_fit.linear())
+              .angle();
+      const bool better =
+          score > best.score * (1.0 + kSameFit) ||
+          (best.object == &o && score >= best.score * (1.0 - kSameFit) && turn < best.turn);
+      if (!better) continue;
+      best.object = &o;
+      best.dormant = c.dormant;
+      best.T_volume_camera = r.T_volume_camera;
+      best.score = score;
+      best.inliers = r.inlier_ratio;
+      best.turn = turn;
+    }
+    volume.setPose(T_world_volume_before);
+  }
+  if (!best.object || best.inliers < opt.reidentify_min_inliers) return false;
+  // The fitted model must cover the detection.
+  TrackedObject& o = *best.object;
+  const Eigen::Isometry3d T_world_volume_before = o.volume->T_world_volume();
+  o.volume->setPose(T_world_camera_ * best.T_volume_camera.inverse());
+  raycaster_.render({{o.volume.get(), o.id, 0.0f}}, intrinsics_, T_world_camera_);
+  cv::Mat ids;
+  raycaster_.download(nullptr, nullptr, &ids);
+  best.iou = em::maskIoU(det_binary, ids == o.id);
+  if (best.iou < kMinMaskIoU) {
+    o.volume->setPose(T_world_volume_before);
+    logDebug("frame ", frames_, ": detection '", d.class_name, "' fits object ", o.id, " (inliers ",
+             best.inliers, ") but covers it with IoU ", best.iou, " only");
+    return false;
+  }
+  logInfo("frame ", frames_, ": object ", o.id, " ('", o.class_name, "') re-attached",
+          best.dormant ? " from dormant" : " (was lost)", " to a '", d.class_name,
+          "' detection: inliers ", best.inliers, ", mask IoU ", best.iou);
+  o.state = ObjectState::kTracked;
+  o.reattached_frame = frames_;
+  o.last_frame = frames_;
+  o.lost_frames = 0;
+  o.hidden = o.leaving = false;
+  o.hidden_frames = 0;
+  o.last_motion = last_motion_;  // assumed still in the world from here
+  o.existence.ex += 1.0;
+  o.dormant_since = -1;
+  o.dormant_reason.clear();
+  object_tracker_.forget(o.volume->index().get());
+  if (best.dormant) {
+    const auto it = std::find_if(dormant_.begin(), dormant_.end(),
+                                 [&](const TrackedObject& x) { return &x == &o; });
+    objects_.push_back(std::move(*it));
+    dormant_.erase(it);
+  }
+  return true;
+}
+
+void SlamSystem::expireDormant() {
+  const em::ObjectOptions& opt = config_.objects;
+  auto erase = [&](size_t i, const std::string& why) {
+    eraseObject(dormant_[i], why + " (dormant since frame " +
+                                 std::to_string(dormant_[i].dormant_since) +
+                                 " after: " + dormant_[i].dormant_reason + ")");
+    dormant_.erase(dormant_.begin() + static_cast<std::ptrdiff_t>(i));
+  };
+  for (size_t i = dormant_.size(); i-- > 0;) {
+    if (frames_ - dormant_[i].dormant_since > opt.reidentify_frames) {
+      erase(i, "not re-identified within objects.reidentify_frames " +
+                   std::to_string(opt.reidentify_frames));
+    }
+  }
+  while (static_cast<int>(dormant_.size()) > opt.max_objects) {
+    erase(0, "more than objects.max_objects dormant objects");
+  }
+  // The pool's room goes to the live volumes first.
+  while (!dormant_.empty()) {
+    const map::PoolStats pool = pool_->stats();
+    const double free_fraction =
+        pool.capacity_slots > 0 ? static_cast<double>(pool.free_slots) / pool.capacity_slots : 0.0;
+    if (free_fraction >= opt.min_free_pool_fraction) break;
+    erase(0, "the voxel pool is short of room (objects.min_free_pool_fraction)");
+  }
+}
+
+}  // namespace emf::pipeline
