@@ -5,6 +5,7 @@
 // matched estimate's ATE and coverage and how many estimates the object was split into, then
 // median / p90 / worst over seeds and objects, and one machine-readable line per
 // configuration. Scoring: objects_suite/scoring.h.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -13,6 +14,7 @@
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
 #include <set>
 #include <string>
 #include <vector>
@@ -24,6 +26,7 @@
 #include "common/log.h"
 #include "io/synth/scene.h"
 #include "io/synth/synth_source.h"
+#include "map/raycaster.h"
 #include "objects_suite/scoring.h"
 #include "pipeline/slam_system.h"
 
@@ -192,11 +195,21 @@ std::map<std::string, std::string> parseQuery(const std::string& q) {
 /// One configuration's run of one scene, frame by frame.
 struct Runner {
   emf::pipeline::SlamSystem slam;
+  // The estimates' masks for their labels: the map ray-cast at 320 px wide at most.
+  emf::io::Intrinsics label_k;
+  emf::map::RayCaster label_caster;
   RunRecord record;
   std::map<int, size_t> est_index;  // estimated id -> index in record.est
 
+  static emf::io::Intrinsics labelIntrinsics(const emf::io::Intrinsics& k) {
+    if (k.width <= 320) return k;
+    return k.scaled(320, static_cast<int>(std::lround(k.height * 320.0 / k.width)));
+  }
+
   Runner(emf::cl::Context& ctx, const emf::Config& config, const emf::io::Intrinsics& k)
-      : slam(ctx, config, k) {}
+      : slam(ctx, config, k),
+        label_k(labelIntrinsics(k)),
+        label_caster(ctx, config.map, label_k.width, label_k.height) {}
 
   void process(const emf::io::Frame& frame, size_t f) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -206,6 +219,15 @@ struct Runner {
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     record.T_world_camera.push_back(
         out.lost ? std::nullopt : std::optional<Eigen::Isometry3d>(out.T_world_camera));
+    cv::Mat rendered, truth;
+    const bool any_tracked = std::any_of(out.objects.begin(), out.objects.end(), [](const auto& o) {
+      return o.state == emf::pipeline::ObjectState::kTracked;
+    });
+    if (any_tracked) {
+      label_caster.render(slam.renderItems(), label_k, out.T_world_camera);
+      label_caster.download(nullptr, nullptr, &rendered);
+      cv::resize(frame.instance_ids, truth, rendered.size(), 0, 0, cv::INTER_NEAREST);
+    }
     for (const auto& o : out.objects) {
       auto it = est_index.find(o.id);
       if (it == est_index.end()) {
@@ -217,11 +239,9 @@ struct Runner {
       emf::bench::EstObject& e = record.est[it->second];
       if (o.state == emf::pipeline::ObjectState::kLost) ++e.lost_frames;
       if (o.state != emf::pipeline::ObjectState::kTracked) continue;
-      const emf::map::Volume* v = slam.volume(o.id);
-      if (!v) continue;
       e.frames.push_back(static_cast<int64_t>(f));
       e.T_object_camera.push_back(o.T_object_camera);
-      e.centre_world.push_back(v->T_world_volume() * (v->spec().extentM().cast<double>() / 2.0));
+      e.labels.push_back(emf::bench::labelFromMasks(rendered, truth, o.id));
     }
   }
 };

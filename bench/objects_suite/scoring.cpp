@@ -9,13 +9,6 @@
 namespace emf::bench {
 namespace {
 
-/// Distance from p to the box (0 inside).
-double boxDistance(const Eigen::AlignedBox3d& box, const Eigen::Vector3d& p) {
-  const Eigen::Vector3d d =
-      (box.min() - p).cwiseMax(Eigen::Vector3d::Zero()).cwiseMax(p - box.max());
-  return d.norm();
-}
-
 std::optional<double> ate(const io::Trajectory& gt, const io::Trajectory& est) {
   if (gt.size() < io::kMinAtePairs || est.size() < io::kMinAtePairs) return std::nullopt;
   try {
@@ -41,19 +34,29 @@ bool isMoving(const GtObject& o) {
   return false;
 }
 
-int labelAt(const std::vector<GtObject>& gt, size_t frame, const Eigen::Vector3d& centre) {
-  int best = 0;
-  double best_d = 1e300;
-  for (const auto& o : gt) {
-    if (frame >= o.T_world_object.size()) continue;
-    const double d = boxDistance(o.bounds, o.T_world_object[frame].inverse() * centre);
-    const double limit = kLabelMarginM + kLabelSizeFraction * o.bounds.sizes().maxCoeff();
-    if (d <= limit && d < best_d) {
-      best_d = d;
-      best = o.id;
+int labelFromMasks(const cv::Mat& rendered_ids, const cv::Mat& instance_ids, int id) {
+  CV_Assert(rendered_ids.type() == CV_32S && instance_ids.type() == CV_16U &&
+            rendered_ids.size() == instance_ids.size());
+  std::map<int, int> under;
+  int pixels = 0;
+  for (int v = 0; v < rendered_ids.rows; ++v) {
+    const int32_t* r = rendered_ids.ptr<int32_t>(v);
+    const uint16_t* g = instance_ids.ptr<uint16_t>(v);
+    for (int u = 0; u < rendered_ids.cols; ++u) {
+      if (r[u] != id) continue;
+      ++pixels;
+      ++under[g[u]];
     }
   }
-  return best;
+  if (pixels == 0) return -1;
+  int best = 0, best_n = 0;
+  for (const auto& [gt, n] : under) {
+    if (gt != 0 && n > best_n) {
+      best = gt;
+      best_n = n;
+    }
+  }
+  return best_n >= kLabelMinShare * pixels ? best : 0;
 }
 
 double quantile(std::vector<double> values, double q) {
@@ -81,17 +84,16 @@ RunScore scoreRun(const RunRecord& run) {
     }
     score.camera_ate_m = ate(gt, est);
   }
-  const Eigen::Isometry3d T_gt_slam =
-      run.T_world_camera_gt.empty() ? Eigen::Isometry3d::Identity() : run.T_world_camera_gt[0];
-
   // Label every estimate.
-  std::vector<int> label(run.est.size(), 0);
+  std::vector<int> label_of(run.est.size(), 0);
   for (size_t e = 0; e < run.est.size(); ++e) {
     const EstObject& est = run.est[e];
     std::map<int, int> votes;
-    for (size_t i = 0; i < est.frames.size(); ++i) {
-      const size_t f = static_cast<size_t>(est.frames[i]);
-      ++votes[labelAt(run.gt, f, T_gt_slam * est.centre_world[i])];
+    int voting = 0;
+    for (int label : est.labels) {
+      if (label < 0) continue;
+      ++votes[label];
+      ++voting;
     }
     int best = 0, best_votes = -1;
     for (const auto& [id, n] : votes) {
@@ -100,10 +102,10 @@ RunScore scoreRun(const RunRecord& run) {
         best_votes = n;
       }
     }
-    label[e] = best;
+    label_of[e] = best;
     int strong = 0;
     for (const auto& [id, n] : votes) {
-      if (id != 0 && n >= 0.2 * static_cast<double>(est.frames.size())) ++strong;
+      if (id != 0 && n >= 0.2 * static_cast<double>(voting)) ++strong;
     }
     if (strong >= 2) ++score.id_switches;
     if (best == 0 && !est.frames.empty()) score.spurious_ids.push_back(est.id);
@@ -126,7 +128,7 @@ RunScore scoreRun(const RunRecord& run) {
     s.visible_frames = static_cast<int>(visible.size());
     std::vector<const EstObject*> mine;
     for (size_t e = 0; e < run.est.size(); ++e) {
-      if (label[e] == o.id && !run.est[e].frames.empty()) mine.push_back(&run.est[e]);
+      if (label_of[e] == o.id && !run.est[e].frames.empty()) mine.push_back(&run.est[e]);
     }
     std::sort(mine.begin(), mine.end(), [](const EstObject* a, const EstObject* b) {
       return a->frames.front() < b->frames.front();

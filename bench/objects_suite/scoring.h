@@ -2,17 +2,16 @@
 // each estimated object is, how often an object was split into several estimates, the
 // spurious estimates, and per object the ATE and coverage as `emf eval` computes them.
 //
-// Each frame an estimate was tracked is labelled with the ground-truth object whose box (its
-// parts' bounding box in its own frame, at the frame's true pose) lies nearest to the
-// estimate's volume centre, when that distance is within kLabelMarginM + kLabelSizeFraction x
-// the object's largest extent; otherwise with 0 (nothing). The SLAM's world frame is its first
-// camera's frame, so the centre is taken to the ground truth's world by the first true camera
-// pose (the camera's drift, about a centimetre, is far below the margin). An estimate is the
-// object most of its frames are labelled with; spurious when that is 0.
+// Each frame an estimate was tracked is labelled with the ground-truth object its mask (the
+// SLAM's ray cast of its model at its pose, the background in front where it is nearer) covers
+// most: the true instance under at least kLabelMinShare of its pixels, else 0 (nothing); frames
+// it renders no pixel on do not vote (labelFromMasks). An estimate is the object most of its
+// voting frames are labelled with; spurious when that is 0.
 #pragma once
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -21,8 +20,7 @@
 
 namespace emf::bench {
 
-constexpr double kLabelMarginM = 0.1;
-constexpr double kLabelSizeFraction = 0.25;
+constexpr double kLabelMinShare = 0.3;
 /// A ground-truth object counts as moving when its box centre moves more than this, or it
 /// turns more than kMovingDeg, over the run.
 constexpr double kMovingM = 0.02;
@@ -51,8 +49,8 @@ struct EstObject {
   std::string class_name;
   std::vector<int64_t> frames;                     // tracked frames, increasing
   std::vector<Eigen::Isometry3d> T_object_camera;  // per tracked frame
-  std::vector<Eigen::Vector3d> centre_world;       // per tracked frame: volume centre, SLAM world
-  int64_t lost_frames = 0;                         // frames its tracking failed
+  std::vector<int> labels;  // per tracked frame: labelFromMasks (-1: rendered no pixel)
+  int64_t lost_frames = 0;  // frames its tracking failed
 };
 
 /// Everything one run produced, per frame.
@@ -90,8 +88,11 @@ struct RunScore {
 /// Whether a ground-truth object moves over the run (kMovingM, kMovingDeg).
 bool isMoving(const GtObject& object);
 
-/// The label of an estimate's centre (ground-truth world) at frame f: a ground-truth id or 0.
-int labelAt(const std::vector<GtObject>& gt, size_t frame, const Eigen::Vector3d& centre_gt_world);
+/// The label of estimate `id` in one frame: `rendered_ids` (CV_32S, the SLAM's ray cast: object
+/// ids > 0) against `instance_ids` (CV_16U ground truth, same size): the instance under most of
+/// its pixels when that is at least kLabelMinShare of them (0 = the static scene counts as
+/// nothing), -1 when it renders no pixel.
+int labelFromMasks(const cv::Mat& rendered_ids, const cv::Mat& instance_ids, int id);
 
 /// Scores a run (see the file comment).
 RunScore scoreRun(const RunRecord& run);

@@ -41,16 +41,15 @@ RunRecord run() {
 }
 
 /// An estimate of the box on frames [from, to): its own object frame is the box's shifted by
-/// `offset` (any frame works for ATE), tracked exactly; its volume centre on the box.
+/// `offset` (any frame works for ATE), tracked exactly; its mask on the box (label 1).
 EstObject estimate(const RunRecord& r, int id, int from, int to, double offset) {
   EstObject e;
   e.id = id;
-  const Eigen::Isometry3d T_slam_gt = r.T_world_camera_gt[0].inverse();
   for (int f = from; f < to; ++f) {
     const Eigen::Isometry3d T_world_object = r.gt[0].T_world_object[f] * at(offset, 0, 0);
     e.frames.push_back(f);
     e.T_object_camera.push_back(T_world_object.inverse() * r.T_world_camera_gt[f]);
-    e.centre_world.push_back(T_slam_gt * (r.gt[0].T_world_object[f] * Eigen::Vector3d(0, 0, 0.2)));
+    e.labels.push_back(1);
   }
   return e;
 }
@@ -59,9 +58,9 @@ TEST(SuiteScoring, SplitsRecreationsAndSpuriousEstimates) {
   RunRecord r = run();
   r.est.push_back(estimate(r, 3, 0, 50, 0.3));
   r.est.push_back(estimate(r, 5, 60, 95, -0.1));
-  // An estimate 1 m beside the box: nothing.
+  // An estimate whose mask lies on nothing but the static scene.
   EstObject far = estimate(r, 6, 10, 20, 0.0);
-  for (auto& c : far.centre_world) c += Eigen::Vector3d(1.0, 0, 0);
+  for (auto& l : far.labels) l = 0;
   far.lost_frames = 4;
   r.est.push_back(far);
   const RunScore s = scoreRun(r);
@@ -112,19 +111,39 @@ TEST(SuiteScoring, StillObjectsAndLabels) {
   RunRecord r = run();
   for (auto& T : r.gt[0].T_world_object) T = at(0.5, 0, 0);
   EXPECT_FALSE(isMoving(r.gt[0]));
-  // Labels: within 0.1 m + 25 % of 0.4 m of the box, else nothing.
-  EXPECT_EQ(labelAt(r.gt, 0, Eigen::Vector3d(0.5, 0, 0.2)), 1);
-  EXPECT_EQ(labelAt(r.gt, 0, Eigen::Vector3d(0.5 + 0.2 + 0.19, 0, 0.2)), 1);
-  EXPECT_EQ(labelAt(r.gt, 0, Eigen::Vector3d(0.5 + 0.2 + 0.21, 0, 0.2)), 0);
-  // An estimate that is the box for half its frames and nothing for the rest: an id switch
-  // needs two objects, so none; its majority is the box (26 of 50 frames).
-  EstObject e = estimate(r, 1, 0, 50, 0.0);
-  for (size_t i = 0; i < 24; ++i) e.centre_world[i] += Eigen::Vector3d(2, 0, 0);
+  // Mask labels: the instance under at least 30 % of the estimate's pixels, else nothing.
+  cv::Mat rendered(4, 10, CV_32S, cv::Scalar(-1)), truth(4, 10, CV_16U, cv::Scalar(0));
+  rendered(cv::Rect(0, 0, 10, 1)).setTo(7);  // estimate 7: 10 px
+  truth(cv::Rect(0, 0, 4, 1)).setTo(2);      // 4 of them on object 2
+  truth(cv::Rect(4, 0, 2, 1)).setTo(3);      // 2 on object 3, 4 on the static scene
+  EXPECT_EQ(labelFromMasks(rendered, truth, 7), 2);
+  truth(cv::Rect(0, 0, 2, 1)).setTo(0);  // 2 of 10 on object 2: below 30 %
+  EXPECT_EQ(labelFromMasks(rendered, truth, 7), 0);
+  EXPECT_EQ(labelFromMasks(rendered, truth, 8), -1);  // renders nothing
+  // An estimate that is the box on 26 voting frames and nothing on 24 (and 10 it was not
+  // rendered on): the box, no id switch (that needs two objects).
+  EstObject e = estimate(r, 1, 0, 60, 0.0);
+  for (size_t i = 0; i < 24; ++i) e.labels[i] = 0;
+  for (size_t i = 50; i < 60; ++i) e.labels[i] = -1;
   r.est.push_back(e);
   const RunScore s = scoreRun(r);
   EXPECT_EQ(s.objects[0].estimates, 1);
   EXPECT_TRUE(s.spurious_ids.empty());
   EXPECT_EQ(s.id_switches, 0);
+}
+
+TEST(SuiteScoring, AnEstimateOnTwoObjectsIsAnIdSwitch) {
+  RunRecord r = run();
+  GtObject other = r.gt[0];
+  other.id = 2;
+  r.gt.push_back(other);
+  EstObject e = estimate(r, 1, 0, 50, 0.0);
+  for (size_t i = 30; i < 50; ++i) e.labels[i] = 2;  // 40 % of its frames on object 2
+  r.est.push_back(e);
+  const RunScore s = scoreRun(r);
+  EXPECT_EQ(s.id_switches, 1);
+  EXPECT_EQ(s.objects[0].estimates, 1);  // the majority
+  EXPECT_EQ(s.objects[1].estimates, 0);
 }
 
 TEST(SuiteScoring, Quantile) {
