@@ -50,7 +50,8 @@ const char* kUsage =
     "  --frames N        frames per scene (default 600)\n"
     "  --scene QUERY     more synth:random query keys, e.g. 'movers=2&camera=orbit'\n"
     "  --config, --set   the configuration under test ('default' column)\n"
-    "  --vs KEY=VALUE    adds a column: that configuration with these keys changed\n"
+    "  --vs KEY=VALUE[,KEY=VALUE..]  adds a column: that configuration with these keys\n"
+    "                    changed (repeat for more columns)\n"
     "  --paper           adds a column: the paper's values (conf/paper.yaml, or --paper-config)\n"
     "  --json FILE       every seed's scores as JSON lines\n"
     "  --per-seed        print every seed's objects (default: only the summary per seed)\n";
@@ -156,15 +157,17 @@ std::vector<Variant> variants(const Args& a) {
   for (const auto& s : a.sets) base.set(s);
   base.validate();
   out.push_back({"default", base});
-  if (!a.vs.empty()) {
+  // Each --vs is a column: the configuration under test with its comma-separated keys changed.
+  for (const auto& column : a.vs) {
     emf::Config v = base;
-    std::string name;
-    for (const auto& s : a.vs) {
-      v.set(s);
-      name += (name.empty() ? "" : ",") + s;
+    size_t pos = 0;
+    while (pos <= column.size()) {
+      const size_t comma = std::min(column.find(',', pos), column.size());
+      v.set(column.substr(pos, comma - pos));
+      pos = comma + 1;
     }
     v.validate();
-    out.push_back({name, v});
+    out.push_back({column, v});
   }
   if (a.paper) {
     emf::Config p;
@@ -228,6 +231,21 @@ struct Runner {
       label_caster.download(nullptr, nullptr, &rendered);
       cv::resize(frame.instance_ids, truth, rendered.size(), 0, 0, cv::INTER_NEAREST);
     }
+    // Objects confirmed now (objects.confirm_detections): their frames since creation first.
+    for (const auto& c : out.confirmed) {
+      auto it = est_index.emplace(c.id, record.est.size()).first;
+      if (it->second == record.est.size()) {
+        record.est.emplace_back();
+        record.est.back().id = c.id;
+        record.est.back().class_name = c.class_name;
+      }
+      emf::bench::EstObject& e = record.est[it->second];
+      for (const auto& p : c.earlier) {
+        e.frames.push_back(p.index);
+        e.T_object_camera.push_back(p.T_object_camera);
+        e.labels.push_back(-1);  // no mask of those frames: no vote
+      }
+    }
     for (const auto& o : out.objects) {
       auto it = est_index.find(o.id);
       if (it == est_index.end()) {
@@ -268,6 +286,9 @@ struct FamilyTotals {
 
 struct Totals {
   std::map<std::string, FamilyTotals> families;
+  // Per counted object in a fixed order (the same in every column): ATE (cm, inf = none) and
+  // coverage (%), for the paired comparison with the first column.
+  std::vector<double> paired_ate_cm, paired_coverage, paired_estimates;
   std::vector<double> camera_ate_cm, moving_ate_cm, moving_coverage, moving_union_coverage;
   std::vector<double> estimates_per_object, spurious, lost_frames, ms, ms_p90;
   int recreated_in_view = 0, id_switches = 0, still_split = 0, objects = 0, moving = 0;
@@ -278,6 +299,9 @@ struct Totals {
       if (o.visible_frames < 60) continue;  // too briefly in view to count
       ++objects;
       estimates_per_object.push_back(o.estimates);
+      paired_ate_cm.push_back(o.ate_m ? *o.ate_m * 100 : INFINITY);
+      paired_coverage.push_back(o.coverage * 100);
+      paired_estimates.push_back(o.estimates);
       recreated_in_view += o.recreated_in_view;
       if (o.moving) {
         ++moving;
@@ -415,6 +439,16 @@ int main(int argc, char** argv) {
           j["seed"] = seed;
           j["camera_ate_m"] = s.camera_ate_m ? nlohmann::json(*s.camera_ate_m) : nlohmann::json();
           j["spurious"] = s.spurious_ids;
+          for (const auto& e : runners[c]->record.est) {
+            if (std::find(s.spurious_ids.begin(), s.spurious_ids.end(), e.id) ==
+                s.spurious_ids.end()) {
+              continue;
+            }
+            j["spurious_detail"].push_back({{"id", e.id},
+                                            {"class", e.class_name},
+                                            {"first_frame", e.frames.front()},
+                                            {"tracked_frames", e.frames.size()}});
+          }
           j["id_switches"] = s.id_switches;
           j["lost_object_frames"] = s.lost_object_frames;
           j["ms_median"] = s.ms_median;
@@ -472,6 +506,27 @@ int main(int argc, char** argv) {
     row("objects counted (moving)", [&](const Totals& t) {
       return std::to_string(t.objects) + " (" + std::to_string(t.moving) + ")";
     });
+    // Paired with the first column, object by object: how many got better or worse (ATE by
+    // more than 10 % and 0.2 cm, coverage by more than 5 points, estimates by one or more).
+    if (configs.size() > 1) {
+      std::printf("\npaired with [0] (objects better / worse): ATE, coverage, estimates\n");
+      for (size_t c = 1; c < configs.size(); ++c) {
+        int ate_b = 0, ate_w = 0, cov_b = 0, cov_w = 0, est_b = 0, est_w = 0;
+        const Totals& a = totals[0];
+        const Totals& b = totals[c];
+        for (size_t i = 0; i < a.paired_ate_cm.size() && i < b.paired_ate_cm.size(); ++i) {
+          const double x = a.paired_ate_cm[i], y = b.paired_ate_cm[i];
+          if (y < x && (std::isinf(x) || (x - y > 0.1 * x && x - y > 0.2))) ++ate_b;
+          if (x < y && (std::isinf(y) || (y - x > 0.1 * x && y - x > 0.2))) ++ate_w;
+          if (b.paired_coverage[i] > a.paired_coverage[i] + 5) ++cov_b;
+          if (b.paired_coverage[i] < a.paired_coverage[i] - 5) ++cov_w;
+          if (b.paired_estimates[i] < a.paired_estimates[i]) ++est_b;
+          if (b.paired_estimates[i] > a.paired_estimates[i]) ++est_w;
+        }
+        std::printf("  [%zu] %s: ATE %d / %d, coverage %d / %d, estimates %d / %d\n", c,
+                    configs[c].name.c_str(), ate_b, ate_w, cov_b, cov_w, est_b, est_w);
+      }
+    }
     // Per motion family, over the moving objects of all seeds.
     std::set<std::string> family_names;
     for (const auto& t : totals) {

@@ -129,6 +129,12 @@ struct ObjectOptions {
   /// Share of a detection's points within the inlier band of a model (after the fit, with at
   /// least half of them on its observed surface) for the detection to re-attach to it.
   double reidentify_min_inliers = 0.8;
+  /// Confirmation (not in the paper, where an object exists from its first detection): a new
+  /// object is tracked and fused from its first detection but reported (outputs, C API) only
+  /// once this many detections matched it, with the poses of the frames before (a false
+  /// detection, a blob on a wall, is seldom detected again). A tentative object missed by two
+  /// detection frames is deleted unreported. 1 = reported at once (the paper).
+  int confirm_detections = 2;
   /// An object is not created when its first integration leaves less than this fraction of the
   /// voxel pool free: the background (and the objects' growth) keep room in a fixed pool.
   double min_free_pool_fraction = 0.25;
@@ -266,6 +272,9 @@ struct ObjectOptions {
     b.real("reidentify_min_inliers", reidentify_min_inliers, 0.0, 1.0, "",
            "share of a detection's points within the inlier band of a model for it to "
            "re-attach");
+    b.integer("confirm_detections", confirm_detections, 1, 100, "detections",
+              "a new object is reported once this many detections matched it (1 = at once, "
+              "the paper)");
     b.real("min_free_pool_fraction", min_free_pool_fraction, 0.0, 1.0, "",
            "no object is created when it would leave less than this fraction of the voxel pool "
            "free (room for the background; 0 = off)");

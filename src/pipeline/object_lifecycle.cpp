@@ -15,6 +15,9 @@ namespace emf::pipeline {
 namespace {
 
 constexpr float kMaskInside = 0.5f;  // a mask pixel belongs to the instance above this p_fg
+// A tentative object (objects.confirm_detections) missed by this many detection frames is
+// dropped: a false detection is seldom repeated, a real object seldom missed twice in a row.
+constexpr double kTentativeMisses = 2.0;
 
 cv::Mat binaryMask(const cv::Mat& probability) { return probability > kMaskInside; }
 
@@ -201,6 +204,7 @@ void SlamSystem::matchDetections(const DetectionBatch& batch, FrameOutcome* out)
   }
   out->detector_ran = true;
   out->detections = static_cast<int>(usable.size());
+  new_objects_only_ = batch.new_objects_only;
 
   // Ray-cast object masks (the background occludes) at the poses of the frame the detector ran
   // on: the current ones, or for a late (async) result the poses it carries; objects created
@@ -282,6 +286,7 @@ void SlamSystem::matchDetections(const DetectionBatch& batch, FrameOutcome* out)
     TrackedObject& o = objects_[static_cast<size_t>(match[i])];
     matched[static_cast<size_t>(match[i])] = true;
     o.existence.ex += 1.0;
+    confirmIfDue(o);
     // Foreground counts from the detection where no other object is in front.
     cv::Mat fg = d.mask.clone();
     const cv::Mat other = (last_ids_ > 0) & (last_ids_ != o.id);
@@ -327,6 +332,15 @@ void SlamSystem::matchDetections(const DetectionBatch& batch, FrameOutcome* out)
   if (!batch.new_objects_only) {
     for (size_t k = 0; k < objects_.size(); ++k) {
       if (!matched[k]) objects_[k].existence.non_ex += 1.0;
+    }
+    // A tentative object missed twice before its confirmation was not there: gone unreported.
+    for (size_t k = objects_.size(); k-- > 0;) {
+      TrackedObject& o = objects_[k];
+      if (!o.confirmed && o.existence.non_ex >= kTentativeMisses) {
+        deleteObject(k, "not confirmed (objects.confirm_detections " +
+                            std::to_string(opt.confirm_detections) + "): missed by " +
+                            std::to_string(kTentativeMisses) + " detection frames");
+      }
     }
   }
 }
@@ -396,6 +410,8 @@ bool SlamSystem::createObject(const io::Detection& d, const cv::Mat& vertex) {
   o.volume = std::make_unique<map::Volume>(*pool_, spec, T_world_volume);
   o.last_motion = last_motion_;  // at first assumed still in the world
   o.first_frame = o.last_frame = frames_;
+  // A detector of new things only (motion) never reports its objects again: nothing to confirm.
+  o.confirmed = opt.confirm_detections <= 1 || new_objects_only_;
   if (opt.claim_region) {
     // The creation frame is the volume frame now.
     const Eigen::Isometry3d T_volume_world = T_world_volume.inverse();
@@ -529,8 +545,26 @@ void SlamSystem::checkVisibility(const cv::Mat& depth) {
   }
 }
 
+void SlamSystem::confirmIfDue(TrackedObject& o) {
+  if (o.confirmed || o.existence.ex < config_.objects.confirm_detections) return;
+  o.confirmed = true;
+  logInfo("frame ", frames_, ": object ", o.id, " ('", o.class_name, "') confirmed by ",
+          o.existence.ex, " detections");
+  confirmed_now_.push_back({o.id, o.class_name, std::move(o.earlier)});
+  o.earlier.clear();
+}
+
 void SlamSystem::deleteObject(size_t i, const std::string& reason) {
   TrackedObject& o = objects_[i];
+  if (!o.confirmed) {
+    // Never reported: no outcome, no mesh, no dormancy.
+    logInfo("frame ", frames_, ": tentative object ", o.id, " ('", o.class_name,
+            "') dropped: ", reason);
+    object_tracker_.forget(o.volume->index().get());
+    reid_tracker_.forget(o.volume->index().get());
+    objects_.erase(objects_.begin() + static_cast<std::ptrdiff_t>(i));
+    return;
+  }
   if (config_.objects.reidentify_frames > 0 && o.rendered) {
     // Dormant: the model stays for a detection that fits it (object_reid.cpp).
     logInfo("frame ", frames_, ": object ", o.id, " ('", o.class_name, "') dormant: ", reason);
@@ -569,6 +603,7 @@ void SlamSystem::eraseObject(TrackedObject& o, const std::string& reason) {
 void SlamSystem::fillObjectOutcomes(FrameOutcome* out) const {
   for (const auto* list : {&objects_, &dormant_}) {
     for (const auto& o : *list) {
+      if (!o.confirmed) continue;  // tentative: reported once confirmed
       ObjectOutcome r;
       r.id = o.id;
       r.class_name = o.class_name;

@@ -115,6 +115,25 @@ void ObjectOutputs::ensureDir(const std::string& dir) const {
 }
 
 void ObjectOutputs::add(const FrameOutcome& outcome) {
+  // Objects confirmed in this frame: their poses since creation come first.
+  for (const ConfirmedObject& c : outcome.confirmed) {
+    Track& t = tracks_[c.id];
+    ObjectSummary& s = t.summary;
+    s.id = c.id;
+    s.class_name = c.class_name;
+    for (const ConfirmedObject::Pose& p : c.earlier) {
+      if (s.first_frame < 0) {
+        s.first_frame = p.index;
+        s.first_timestamp = p.timestamp;
+      }
+      s.last_frame = p.index;
+      s.last_timestamp = p.timestamp;
+      ++s.frames_tracked;
+      if (t.T_object_camera.empty() || p.timestamp > t.T_object_camera.stamps.back()) {
+        t.T_object_camera.append(p.timestamp, p.T_object_camera);
+      }
+    }
+  }
   for (const ObjectOutcome& o : outcome.objects) {
     Track& t = tracks_[o.id];
     ObjectSummary& s = t.summary;

@@ -8,10 +8,12 @@
 // tracker aligns the frame's points to the model from several starting poses (T_world_initial
 // candidates): the object's last pose, and the last pose turned about the vertical through the
 // model's centre by 0, 30, .., 330 deg and moved so that the model's rendered points have the
-// detection's centroid. The best fit (inliers x points on the model) counts when its inlier
-// share reaches objects.reidentify_min_inliers, at least half of the detection's points landed
-// on the model's observed surface and the model's rendered mask overlaps the detection (IoU
-// >= kMinMaskIoU).
+// detection's centroid. The best fit (the largest inlier share) counts when that share reaches
+// objects.reidentify_min_inliers, at least half of the detection's points landed on the model's
+// observed surface and the model's rendered mask overlaps the detection (IoU >= kMinMaskIoU).
+// A shape that fits about as well (inlier shares within 3 points) in orientations more than
+// 20 deg apart (a symmetric box, a car front to back) re-attaches only in the one nearest its
+// last pose, and only when that is within 20 deg of it.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -27,7 +29,8 @@ constexpr int kHeadings = 12;              // starting headings about the vertic
 constexpr double kMinValidFraction = 0.5;  // of the detection's points on the observed model
 constexpr double kMinMaskIoU = 0.3;        // rendered model mask vs detection mask
 constexpr float kInside = 0.5f;            // mask threshold
-constexpr double kSameFit = 0.05;          // fits whose scores differ by less are alike
+constexpr double kSameFit = 0.03;          // fits whose inlier shares differ by less are alike
+constexpr double kAmbiguousRad = 20.0 * kPi / 180.0;  // alike fits further apart: ambiguous
 
 Eigen::Vector3d centroid(const std::vector<Eigen::Vector3d>& points) {
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
@@ -78,13 +81,16 @@ bool SlamSystem::reattach(const io::Detection& d,
     }
   }
 
-  struct Best {
+  // Every fit of every candidate; the candidate of the best fit is chosen below.
+  struct Fit {
     TrackedObject* object = nullptr;
     bool dormant = false;
     Eigen::Isometry3d T_volume_camera = Eigen::Isometry3d::Identity();
+    Eigen::Matrix3d R_world_initial = Eigen::Matrix3d::Identity();  // the fitted orientation
     double score = 0, inliers = 0, iou = 0;
     double turn = 0;  // rotation from the object's last pose, radians
-  } best;
+  };
+  std::vector<Fit> fits;
   for (const Candidate& c : candidates) {
     TrackedObject& o = *c.object;
     map::Volume& volume = *o.volume;
@@ -141,26 +147,40 @@ bool SlamSystem::reattach(const io::Detection& d,
                r.lost ? "lost (" + r.loss_reason + ")" : std::string("fitted"), ", inliers ",
                r.inlier_ratio, ", on the model ", r.valid_fraction);
       if (r.lost || r.valid_fraction < kMinValidFraction) continue;
-      const double score = r.inlier_ratio * r.valid_fraction;
-      // Symmetric shapes fit as well turned (a box by 90 or 180 deg, a car front to back):
-      // of the fits about as good as the best, the one turned least from the last pose wins.
-      const Eigen::Isometry3d T_world_initial_fit =
-          T_world_camera_ * r.T_volume_camera.inverse() * volume.T_volume_initial();
-      const double turn =
-          Eigen::AngleAxisd(T_world_initial.linear().transpose() * T_world_initial_fit.linear())
-              .angle();
-      const bool better =
-          score > best.score * (1.0 + kSameFit) ||
-          (best.object == &o && score >= best.score * (1.0 - kSameFit) && turn < best.turn);
-      if (!better) continue;
-      best.object = &o;
-      best.dormant = c.dormant;
-      best.T_volume_camera = r.T_volume_camera;
-      best.score = score;
-      best.inliers = r.inlier_ratio;
-      best.turn = turn;
+      Fit f;
+      f.object = &o;
+      f.dormant = c.dormant;
+      f.T_volume_camera = r.T_volume_camera;
+      f.R_world_initial =
+          (T_world_camera_ * r.T_volume_camera.inverse() * volume.T_volume_initial()).linear();
+      f.score = r.inlier_ratio;
+      f.inliers = r.inlier_ratio;
+      f.turn = Eigen::AngleAxisd(T_world_initial.linear().transpose() * f.R_world_initial).angle();
+      fits.push_back(f);
     }
     volume.setPose(T_world_volume_before);
+  }
+  if (fits.empty()) return false;
+  const Fit top = *std::max_element(fits.begin(), fits.end(),
+                                    [](const Fit& a, const Fit& b) { return a.score < b.score; });
+  // A symmetric shape fits as well turned (a box by 90 or 180 deg, a car front to back). When
+  // the fits about as good as the best disagree on the orientation, only the one turned least
+  // from the last pose may be taken, and only if that turn is small: an orientation guessed
+  // among look-alikes would put the rest of the trajectory off.
+  Fit best = top;
+  bool ambiguous = false;
+  for (const Fit& f : fits) {
+    if (f.object != top.object || f.score < top.score - kSameFit) continue;
+    if (Eigen::AngleAxisd(f.R_world_initial.transpose() * top.R_world_initial).angle() >
+        kAmbiguousRad) {
+      ambiguous = true;
+    }
+    if (f.turn < best.turn) best = f;
+  }
+  if (ambiguous && best.turn > kAmbiguousRad) {
+    logDebug("frame ", frames_, ": detection '", d.class_name, "' fits object ", top.object->id,
+             " in several orientations, none near its last one: not re-attached");
+    return false;
   }
   if (!best.object || best.inliers < opt.reidentify_min_inliers) return false;
   // The fitted model must cover the detection.
@@ -188,6 +208,7 @@ bool SlamSystem::reattach(const io::Detection& d,
   o.hidden_frames = 0;
   o.last_motion = last_motion_;  // assumed still in the world from here
   o.existence.ex += 1.0;
+  confirmIfDue(o);
   o.dormant_since = -1;
   o.dormant_reason.clear();
   object_tracker_.forget(o.volume->index().get());

@@ -203,6 +203,8 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
   unmatched_.clear();
   created_mask_.release();
   deleted_now_.clear();
+  confirmed_now_.clear();
+  frame_timestamp_ = frame.timestamp;
   {
     ScopedStage s(timer_, "preprocess");
     // The range guard's frame limit, once for both preprocessors (same depth range).
@@ -290,7 +292,15 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
       expireDormant();
     }
   }
+  // Tentative objects keep their tracked poses for the outputs until they are confirmed.
+  for (TrackedObject& o : objects_) {
+    if (o.confirmed || o.state != ObjectState::kTracked) continue;
+    o.earlier.push_back(
+        {frames_, frame.timestamp, o.volume->T_world_initial().inverse() * T_world_camera_});
+  }
   fillObjectOutcomes(&out);
+  out.confirmed = std::move(confirmed_now_);
+  confirmed_now_.clear();
   timer_.endFrame();
   counters_.endFrame();
   ++frames_;

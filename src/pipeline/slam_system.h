@@ -59,6 +59,19 @@ struct ObjectOutcome {
   std::string deleted_reason;               // set with kDeleted, and with kDormant: why
 };
 
+/// The poses of a tentative object (objects.confirm_detections) before it was confirmed: the
+/// frames it was tracked on, for outputs to fill its trajectory in.
+struct ConfirmedObject {
+  int id = 0;
+  std::string class_name;
+  struct Pose {
+    int64_t index = 0;     // SlamSystem frame index
+    double timestamp = 0;  // seconds
+    Eigen::Isometry3d T_object_camera = Eigen::Isometry3d::Identity();
+  };
+  std::vector<Pose> earlier;  // oldest first, before the frame of the FrameOutcome
+};
+
 /// How one detection of a frame was matched to the objects' ray-cast masks.
 struct DetectionMatch {
   std::string class_name;
@@ -77,8 +90,11 @@ struct FrameOutcome {
   std::string loss_reason;
   track::TrackResult track;          // of the background (unset on the first frame)
   map::AllocationReport allocation;  // of the background integration (unset when lost)
-  /// Objects alive after this frame, plus those deleted in it (state kDeleted), by id.
+  /// Objects alive after this frame, plus those deleted in it (state kDeleted), by id. Tentative
+  /// objects (objects.confirm_detections) are left out until confirmed.
   std::vector<ObjectOutcome> objects;
+  /// Objects confirmed in this frame, with their tracked poses before it (earliest first).
+  std::vector<ConfirmedObject> confirmed;
   bool detector_ran = false;            // detections were applied this frame
   int detections = 0;                   // detections used this frame
   std::vector<DetectionMatch> matches;  // per detection used, in the detector's order
@@ -130,6 +146,10 @@ struct TrackedObject {
   /// The frame a detection re-attached it (its E-step association of that frame is not its
   /// own: it is not integrated or judged by its association then).
   int64_t reattached_frame = -1;
+  /// Tentative until objects.confirm_detections detections matched it: tracked and fused but not
+  /// reported; `earlier` keeps its tracked poses for the outputs once it is confirmed.
+  bool confirmed = true;
+  std::vector<ConfirmedObject::Pose> earlier;
 };
 
 class SlamSystem {
@@ -225,8 +245,11 @@ class SlamSystem {
   // After integration: the visibility, association, lost and hidden rules on each object's own
   // ray cast at objects.visibility_width against `depth` (the frame's raw depth).
   void checkVisibility(const cv::Mat& depth);
-  // Retires active object i for `reason`: dormant with objects.reidentify_frames, else deleted.
+  // Retires active object i for `reason`: dormant with objects.reidentify_frames, else deleted;
+  // a tentative one is dropped unreported.
   void deleteObject(size_t i, const std::string& reason);
+  // Confirms a tentative object once objects.confirm_detections detections matched it.
+  void confirmIfDue(TrackedObject& o);
   // Deletes an object for good (the deletion hook, the outcome, the trackers' state).
   void eraseObject(TrackedObject& o, const std::string& reason);
   /// Re-identification (object_reid.cpp): fits the detection (its creation mask and points,
@@ -261,7 +284,10 @@ class SlamSystem {
   std::vector<int> estep_ids_;          // volume ids of the last E-step (empty: none this frame)
   cv::Mat created_mask_;  // union of the masks of objects created this frame (or empty)
   std::vector<io::Detection> unmatched_;    // this frame's detections that matched nothing
+  bool new_objects_only_ = false;           // they come from a detector of new things only (motion)
   std::vector<ObjectOutcome> deleted_now_;  // objects deleted in this frame
+  std::vector<ConfirmedObject> confirmed_now_;  // objects confirmed in this frame
+  double frame_timestamp_ = 0;                  // of the frame being processed
   cv::Mat last_ids_;  // object ids ray-cast for the last detection matching (frame size)
   // The visibility rule's ray cast: its image size (objects.visibility_width), its thresholds
   // scaled to that size, and the images of each object's cast (kept to reuse their buffers):

@@ -137,7 +137,9 @@ TEST(Example, TracksADatasetFolder) {
 TEST(Example, TracksTheCarsDataset) {
   const std::string dir = writeFolder("cars");
   std::string out;
-  const std::string config = std::string(kConfig) + "\ndetector: {plugin: maskfile}";
+  // 16 frames hold one detection frame: the cars are reported from their first detection.
+  const std::string config =
+      std::string(kConfig) + "\ndetector: {plugin: maskfile}\nobjects: {confirm_detections: 1}";
   const int rc =
       test::runCommand(std::string(EMF_EXAMPLE_PATH) + " tum:" + dir + " '" + config + "'", &out);
   ASSERT_EQ(rc, 0) << out;

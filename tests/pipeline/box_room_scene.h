@@ -54,12 +54,15 @@ inline io::Detection exactDetection(const io::Frame& f, int id) {
   return det;
 }
 
-/// A 64 MiB pool and a 5.12 m background at 2 cm: room enough for the small scene.
+/// A 64 MiB pool and a 5.12 m background at 2 cm: room enough for the small scene. The tests
+/// detect their objects once: an object is reported from its first detection
+/// (objects.confirm_detections 1; tests/pipeline/slam_confirm_test.cpp tests confirmation).
 inline Config smallSceneConfig() {
   Config config;
   config.map.memory_mb = 64;
   config.map.background_voxel_m = 0.02;
   config.map.background_resolution = 256;
+  config.objects.confirm_detections = 1;
   return config;
 }
 

@@ -85,6 +85,33 @@ TEST(ObjectOutputs, TrajectoriesHoldTrackedFramesOnly) {
   EXPECT_TRUE(cup.poses[1].isApprox(pose(13.0, 1.3), kTumPoseTolerance));
 }
 
+TEST(ObjectOutputs, AConfirmedObjectsEarlierPosesComeFirst) {
+  // Object 3 was created on frame 0 and confirmed on frame 2 (objects.confirm_detections): the
+  // outcome of frame 2 carries its poses of frames 0 and 1, then reports it as tracked.
+  const std::string dir = test::tempDir("objout-confirmed");
+  ObjectOutputs out(dir, true);
+  out.add(frame(0, {}));
+  out.add(frame(1, {}));
+  FrameOutcome f2 = frame(2, {object(3, "box", ObjectState::kTracked, 2.0)});
+  ConfirmedObject c;
+  c.id = 3;
+  c.class_name = "box";
+  for (int64_t i : {0, 1})
+    c.earlier.push_back({i, 10.0 + 0.5 * static_cast<double>(i), pose(i, 0.1 * i)});
+  f2.confirmed = {c};
+  out.add(f2);
+  out.writeTrajectories();
+  const io::Trajectory box = io::readTrajectory(dir + "/object-3.txt");
+  ASSERT_EQ(box.size(), 3u);
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_NEAR(box.stamps[i], 10.0 + 0.5 * static_cast<double>(i), 1e-6);
+    EXPECT_TRUE(box.poses[i].isApprox(pose(i, 0.1 * i), kTumPoseTolerance)) << i;
+  }
+  ASSERT_EQ(out.summaries().size(), 1u);
+  EXPECT_EQ(out.summaries()[0].first_frame, 0);
+  EXPECT_EQ(out.summaries()[0].frames_tracked, 3);
+}
+
 TEST(ObjectOutputs, AnEarlierRunsObjectFilesAreRemovedOthersKept) {
   // A folder that held a run with objects 1 and 7: this run tracks objects 1 and 2, so
   // object-7.* would be scored by `emf eval` as this run's. Unrelated files stay.

@@ -64,6 +64,10 @@ ChairRun runChair(bool claim_region) {
       const double offset = (ob.T_world_object * centre_in_object - first).norm();
       run.max_offset = std::max(run.max_offset, offset);
     }
+    // Confirmed in this frame (objects.confirm_detections): its frames before count too.
+    for (const ConfirmedObject& c : o.confirmed) {
+      if (c.id == chair) run.tracked += static_cast<int>(c.earlier.size());
+    }
   }
   EXPECT_EQ(frames, kFrames);
   EXPECT_NE(chair, 0) << "no chair created on frame 0";

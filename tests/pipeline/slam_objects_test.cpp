@@ -5,6 +5,7 @@
 // manual check); the figures of a run are printed.
 #include <cstdlib>
 #include <map>
+#include <set>
 
 #include "io/eval.h"
 #include "io/frame_source.h"
@@ -148,6 +149,7 @@ CarsRun runCars(const Config& config, int frames, bool source_detections) {
   std::map<int, io::Trajectory> object_gt, object_est;  // T_object_camera per frame
   io::Frame f;
   CarsRun run;
+  std::set<int> seen;  // objects reported so far
   while (src->next(f)) {
     const FrameOutcome o =
         slam.process(f, source_detections && f.detections ? &*f.detections : nullptr);
@@ -156,8 +158,12 @@ CarsRun runCars(const Config& config, int frames, bool source_detections) {
     for (const auto& [id, T_wo] : f.T_world_object_gt) {
       object_gt[id].append(f.timestamp, T_wo.inverse() * *f.T_world_camera_gt);
     }
+    // Objects confirmed now (objects.confirm_detections): their poses since creation first.
+    for (const auto& c : o.confirmed) {
+      for (const auto& p : c.earlier) object_est[c.id].append(p.timestamp, p.T_object_camera);
+    }
     for (const auto& ob : o.objects) {
-      if (ob.first_frame == o.index) {
+      if (seen.insert(ob.id).second) {
         ++run.created;
         // New volumes take the object truncation (objects.truncation_voxels, raised to the
         // pixel floor), not the map's: at 320x240 both cars get fewer than its 10 voxels.
