@@ -58,7 +58,9 @@ struct Variant {
 
 std::vector<Variant> variants() {
   std::vector<Variant> out;
-  TrackOptions paper;  // METHOD.md: tau 1e3, eps 1e-8, 100 iterations, all pixels, plain LM
+  // The paper's settings (docs/method.md#tracking): tau 1e3, eps 1e-8, 100 iterations, all
+  // pixels, plain LM.
+  TrackOptions paper;
   paper.coarse_levels = 0;
   paper.early_exit_step = 0.0;
   paper.max_step_scale = 1.0;

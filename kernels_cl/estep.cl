@@ -1,4 +1,4 @@
-// E-step of the EM loop (METHOD.md step 2): per pixel u and volume i, the likelihood
+// E-step of the EM loop (docs/method.md#e-step): per pixel u and volume i, the likelihood
 //   p(u | i) = alpha / (2 sigma) * exp(-|psi_i(T_i p(u))| / sigma) * p_fg,i + (1 - alpha) p_U
 // when T_i p(u) lies inside volume i's grid and its claim box (claim_lo <= p < claim_hi, volume
 // frame; objects.claim_region), else 0; then q_i(u) = p(u | i) / sum_j p(u | j).

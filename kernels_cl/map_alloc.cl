@@ -1,4 +1,4 @@
-// Block allocation in the voxel-block pool (ARCHITECTURE.md "Memory: one fixed pool").
+// Block allocation in the voxel-block pool (docs/memory.md#per-frame).
 //
 // Per frame and volume:
 //   mark_blocks          per pixel (16 per work item): marks every block that the pixel's ray

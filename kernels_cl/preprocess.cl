@@ -1,5 +1,5 @@
-// Preprocessing (METHOD.md step 1): depth range check, 7x7 bilateral filter of the depth image
-// (its range sigma grows with depth^2: PreprocessOptions::sigma_depth_per_m2) and
+// Preprocessing (docs/method.md#preprocessing): depth range check, 7x7 bilateral filter of the
+// depth image (its range sigma grows with depth^2: PreprocessOptions::sigma_depth_per_m2) and
 // back-projection to a camera-frame vertex map.
 // CPU reference: track::preprocessReference (src/track/preprocess.cpp); keep them identical.
 //

@@ -1,5 +1,5 @@
-// Direct SDF alignment (METHOD.md step 3): per-pixel residual, Jacobian and Gauss-Newton terms
-// of E = sum_u q_u c_u rho_delta(psi(T p_u)), reduced on the device.
+// Direct SDF alignment (docs/method.md#tracking): per-pixel residual, Jacobian and Gauss-Newton
+// terms of E = sum_u q_u c_u rho_delta(psi(T p_u)), reduced on the device.
 // CPU reference: track::accumulateReference (src/track/tracker.cpp); keep them identical.
 //
 // T = T_volume_camera (rows r0, r1, r2: rotation | translation) maps camera points p_u (the

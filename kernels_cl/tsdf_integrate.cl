@@ -1,5 +1,5 @@
 // Projective TSDF integration of one depth image into the listed blocks of one volume
-// (METHOD.md step 4), with the per-pixel association weight q, the weight cap W_max, the
+// (docs/method.md#integration), with the per-pixel association weight q, the weight cap W_max, the
 // authors' free-space rule, and the foreground/background count update of object volumes.
 //
 // integrate_blocks: one work-group per listed block (from assign_blocks), 32 work items of 16

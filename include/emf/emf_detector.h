@@ -119,7 +119,7 @@ typedef struct emf_detector_api {
 
 /** The detector reports only what the SLAM does not explain yet (e.g. `motion`): an existing
  *  object it does not detect is no evidence that the object is gone, so the host does not
- *  count NonEx for it (METHOD.md step 5). Without the flag every unmatched object gets
+ *  count NonEx for it (docs/method.md#matching). Without the flag every unmatched object gets
  *  NonEx += 1 per call. */
 #define EMF_DETECTOR_FLAG_NEW_OBJECTS_ONLY 0x1u
 /** The detector reads the SLAM feedback of emf_detector_frame (residual,

@@ -1,5 +1,5 @@
 // Options of the `dnn` detector plugin, parsed from its configuration string
-// ("key=value,key=value"; README.md "Trained detectors (dnn plugin)" lists the keys).
+// ("key=value,key=value"; docs/plugins.md#configuration lists the keys).
 #pragma once
 
 #include <stdexcept>
@@ -21,7 +21,7 @@ class DnnError : public std::runtime_error {
   emf_status status_;
 };
 
-/// How the model's outputs are laid out (README.md "Output layouts").
+/// How the model's outputs are laid out (docs/plugins.md#output-layouts).
 enum class Layout {
   kYoloV8,   // output0 [1, 4 + nc + nm, N], output1 [1, nm, mh, mw] (YOLOv8/YOLO11-seg)
   kMaskRcnn  // boxes [N, 4], labels [N], scores [N], masks [N, 1, mh, mw] per box

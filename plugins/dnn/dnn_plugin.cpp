@@ -3,7 +3,7 @@
 // score, binary mask and per-pixel foreground probability, in depth-image pixels.
 // Config: "model=/path/m.onnx,layout=yolov8|maskrcnn,input=640x640,classes=/path/names,
 // score=0.25,nms=0.45,mask_threshold=0.5,target=cpu|opencl,max_detections=100,
-// mask_values=logits|probabilities" (README.md "Trained detectors (dnn plugin)").
+// mask_values=logits|probabilities" (docs/plugins.md#the-dnn-plugin).
 // Needs colour: emf_detector_frame.color (BGR8, registered to depth).
 #include <emf/emf_detector.h>
 

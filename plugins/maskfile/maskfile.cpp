@@ -1,7 +1,7 @@
 // `maskfile` detector plugin: replays the detections stored with a dataset
-// (README.md "Detections on disk"): masks/<timestamp>.png (uint16, pixel = detection id 1..n,
-// 0 = none) and masks/<timestamp>.txt (`det_id class_name score`, '_' for spaces in names),
-// <timestamp> being the depth timestamp string of the frame.
+// (docs/inputs_outputs.md#detections-on-disk): masks/<timestamp>.png (uint16, pixel = detection
+// id 1..n, 0 = none) and masks/<timestamp>.txt (`det_id class_name score`, '_' for spaces in
+// names), <timestamp> being the depth timestamp string of the frame.
 //
 // Config: "" (the dataset folder is taken from the source URI, tum:<dir> or cofusion:<dir>) or
 // "dir=<dataset folder>". Frames without a masks file have no detections.

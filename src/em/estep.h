@@ -1,4 +1,4 @@
-// The E-step of the EM loop (METHOD.md step 2; kernels_cl/estep.cl): association weights
+// The E-step of the EM loop (docs/method.md#e-step; kernels_cl/estep.cl): association weights
 // q_i(u) of every pixel to every volume (background i = 0, objects 1..N), plus the residual
 // |psi| of the best-associated volume per pixel (the feedback the motion detector reads).
 //

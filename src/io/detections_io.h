@@ -1,4 +1,4 @@
-// Reading detections stored beside a dataset (the "Detections on disk" format of README.md):
+// Reading detections stored beside a dataset (docs/inputs_outputs.md#detections-on-disk):
 //   masks/<timestamp>.png  uint16 PNG of the depth image's size; pixel = detection id 1..n,
 //                          0 = no detection (so masks of one frame do not overlap)
 //   masks/<timestamp>.txt  one line per detection: `det_id class_name score`, spaces in class

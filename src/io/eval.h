@@ -144,7 +144,7 @@ EvalReport evaluatePaths(const std::string& gt_path, const std::string& est_path
 
 /// A fixed-width table of the report (one line per trajectory).
 std::string formatReport(const EvalReport& report);
-/// The report as JSON (metres, degrees, seconds; see README "emf eval").
+/// The report as JSON (metres, degrees, seconds; see docs/evaluation.md).
 nlohmann::json reportToJson(const EvalReport& report);
 /// Draws the report: for the camera and every matched object, a top view of the ground truth
 /// and the aligned estimate and the translational error over time. Written atomically as PNG.

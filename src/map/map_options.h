@@ -12,7 +12,7 @@ struct MapOptions {
   double background_voxel_m = 0.01;
   /// Background extent in voxels per axis (512 at 1 cm = 5.12 m, as in the paper).
   int background_resolution = 512;
-  /// Truncation distance in voxels (METHOD.md step 4).
+  /// Truncation distance in voxels (docs/method.md#integration).
   double truncation_voxels = 10.0;
   /// Weight cap W_max.
   double max_weight = 64.0;

@@ -40,8 +40,8 @@ struct VolumeSpec {
   /// (the authors' rule; map.free_space_full_weight for the background).
   bool free_space_full_weight = true;
 
-  /// The background of METHOD.md step 7 from map.background_voxel_m / background_resolution
-  /// (rounded up to whole blocks) / truncation_voxels.
+  /// The background of docs/method.md#background-volume from map.background_voxel_m /
+  /// background_resolution (rounded up to whole blocks) / truncation_voxels.
   static VolumeSpec background(const MapOptions& options);
   /// An object volume of `resolution_voxels` per axis (rounded up to whole blocks).
   static VolumeSpec object(const MapOptions& options, int resolution_voxels, float voxel_size_m);

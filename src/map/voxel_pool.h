@@ -1,5 +1,5 @@
-// The one fixed-memory voxel-block pool every volume draws from (ARCHITECTURE.md "Memory: one
-// fixed pool"; policy in README.md "Memory").
+// The one fixed-memory voxel-block pool every volume draws from
+// (docs/architecture.md#memory-one-fixed-pool; policy in docs/memory.md).
 //
 // At construction the pool makes ONE device allocation of `map.memory_mb` holding fixed-size
 // slots of kBlockVoxels short2 voxels (2 KiB each), plus a device free list (one int per slot)

@@ -1,4 +1,4 @@
-// When the detector runs (METHOD.md step 5, ARCHITECTURE "detector thread"): either
+// When the detector runs (docs/method.md#detection-frames, docs/architecture.md#threads): either
 // sequentially on every N-th frame (deterministic, for datasets) or asynchronously on its own
 // thread (live sensors), where a result arrives some frames late and is matched using the poses
 // of the frame it was computed on — so every result carries those poses.

@@ -1,4 +1,4 @@
-// The per-frame SLAM loop (METHOD.md steps 1-4 and 7) on one OpenCL device: preprocess the
+// The per-frame SLAM loop (docs/method.md#per-frame) on one OpenCL device: preprocess the
 // depth, track the camera against the background SDF by direct alignment, integrate the frame
 // into the background volume. Everything the loop needs on the device (pool, volume grids,
 // images) is allocated at construction; process() allocates nothing on the device.
@@ -115,7 +115,7 @@ track::TrackOptions reidTrackOptions(const Config& config, int image_width);
 /// The device view of a volume that tracking and the E-step read.
 map::VolumeDeviceView deviceView(const map::Volume& volume);
 
-/// An object volume and its bookkeeping (METHOD.md "State").
+/// An object volume and its bookkeeping (docs/method.md#state).
 struct TrackedObject {
   int id = 0;
   std::string class_name;
@@ -165,8 +165,8 @@ class SlamSystem {
   ~SlamSystem();
 
   /// Processes one frame (depth CV_32F metres, NaN = invalid, of the intrinsics' size): the EM
-  /// loop of METHOD.md steps 1-6. The detector plugin of config detector.* (if any) runs on its
-  /// schedule (sequential: every N-th frame, now; async: on its own thread, its result applied
+  /// loop of docs/method.md#per-frame. The detector plugin of config detector.* (if any) runs on
+  /// its schedule (sequential: every N-th frame, now; async: on its own thread, its result applied
   /// on the frame it arrives with object masks rendered at the poses of the frame it was
   /// computed on). `detections` (optional): instances the caller detected on this very frame,
   /// applied like a detector result. Throws InvalidArgument naming the frame when its size or

@@ -1,6 +1,6 @@
-// Preprocessing of a depth frame (METHOD.md step 1) on the device: range check, bilateral
-// filter, back-projection to a vertex map. Host wrapper of kernels_cl/preprocess.cl and its CPU
-// reference.
+// Preprocessing of a depth frame (docs/method.md#preprocessing) on the device: range check,
+// bilateral filter, back-projection to a vertex map. Host wrapper of kernels_cl/preprocess.cl and
+// its CPU reference.
 #pragma once
 
 #include <limits>

@@ -1,4 +1,4 @@
-// Direct SDF-alignment tracking of the camera against one volume (METHOD.md step 3).
+// Direct SDF-alignment tracking of the camera against one volume (docs/method.md#tracking).
 //
 // Minimises E(T) = sum_u q_u * c_u * rho(psi(T p_u)) over T = T_volume_camera, where p_u is the
 // camera-frame vertex map, psi the volume's trilinear SDF (metres), c_u = W(T p_u) / max W the
