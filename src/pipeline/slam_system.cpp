@@ -35,13 +35,13 @@ track::TrackOptions objectTrackOptions(const Config& config, int image_width) {
   o.recovery_min_inlier_ratio = o.min_inlier_ratio;
   // Objects cover few pixels: all of them are used at the finest level.
   o.pixel_stride = 1;
-  // Rotations about the object's own points: the camera is metres away from a small object
-  // (cars preset, 90 frames at 320x240, car ATE 3.3 / 4.7 cm vs 4.0 / 6.9 about the camera).
+  // Rotations about the object's own points: the camera is metres away from a small object, and
+  // rotations about a far centre couple rotation and translation
+  // (docs/method.md#object-tracking).
   o.rotation_centre = "stiffness";
   // The map-confidence weight W(p) varies strongly across a small, partly observed model:
   // accepting steps by the cost change made LM crawl and stall at the prediction
-  // (TrackOptions::step_acceptance; occlusion preset, 3 seeds: 4 -> 0 lost object frames,
-  // bear coverage 98-100 -> 100 %).
+  // (TrackOptions::step_acceptance).
   o.step_acceptance = "fixed_weights";
   return o;
 }
@@ -62,9 +62,8 @@ track::PreprocessOptions objectPreprocessOptions(const Config& config) {
   if (!config.objects.filter_depth) {
     o.bilateral_radius_px = config.objects.depth_filter_radius_px;
     o.sigma_depth_m = config.objects.depth_filter_sigma_m;
-    // The objects' fixed range sigma: growing it with depth as the camera's (+0.02 z^2) blended
-    // silhouettes at 320x240 (bear 2.5 -> 3.0 cm, chair 1.1 -> 3.9 cm; cars at 640x480 1.9-2.0 ->
-    // 1.8-1.9 cm).
+    // The objects' range sigma stays fixed: growing it with depth as the camera's blends
+    // silhouettes at low resolution (docs/method.md#preprocessing).
     o.sigma_depth_per_m2 = 0.0;
     o.hole_margin_px = config.objects.depth_hole_margin_px;
   }
