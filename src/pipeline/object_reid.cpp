@@ -1,8 +1,8 @@
 // Re-identification of SlamSystem (beyond the paper, which deletes an object and starts over):
 // an object retired by a rule stays dormant with its model (objects.reidentify_frames); a
 // detection that would create a new object is first fitted to the models of the live objects
-// whose pose is stale (lost, or held as hidden or leaving) and of the dormant ones, and one that
-// fits re-attaches to that object, which keeps its id and trajectory.
+// whose pose is stale (lost, or held as hidden or leaving) and of the dormant ones of its class,
+// and one that fits re-attaches to that object, which keeps its id and trajectory.
 //
 // The fit: the detection's mask is the association map (q = 1 on its pixels) and the object
 // tracker aligns the frame's points to the model from several starting poses (T_world_initial
@@ -73,11 +73,11 @@ bool SlamSystem::reattach(const io::Detection& d,
       candidates.push_back({&o, false});
     }
   }
-  // Dormant objects, most recent first, into a free slot only (objects.max_objects). Their class
-  // may differ: detectors confuse classes (a car taken for a truck); the fit decides.
+  // Dormant objects of the detection's class, most recent first, into a free slot only
+  // (objects.max_objects).
   if (static_cast<int>(objects_.size()) < opt.max_objects) {
     for (auto it = dormant_.rbegin(); it != dormant_.rend(); ++it) {
-      candidates.push_back({&*it, true});
+      if (it->class_name == d.class_name) candidates.push_back({&*it, true});
     }
   }
 
