@@ -1,5 +1,5 @@
 // Options of the E-step (section `em`) and of the object lifecycle (section `objects`).
-// Defaults are METHOD.md's.
+// Defaults are docs/method.md's; where they depart from the paper: docs/deviations.md.
 #pragma once
 
 #include <string>
@@ -14,7 +14,7 @@ struct EmOptions {
   double alpha = 0.8;
   double p_uniform = 1.0;
   double min_weight = 0.5;
-  /// em: the E-step (METHOD.md step 2); pfg: the paper's "w/o assoc." ablation (q_i = p_fg).
+  /// em: the E-step (docs/method.md#e-step); pfg: the paper's "w/o assoc." ablation (q_i = p_fg).
   std::string association = "em";
 
   void bind(OptionBinder& b) {

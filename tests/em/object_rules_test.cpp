@@ -1,4 +1,4 @@
-// Each lifecycle rule of METHOD.md steps 5-6 on a constructed case.
+// Each lifecycle rule of docs/method.md#detection-frames and #visibility-and-deletion on a constructed case.
 #include "em/object_rules.h"
 
 #include <cmath>

@@ -1,6 +1,6 @@
 // bench/track_bias --object (the object tracker's floor on exact, object-only frames with a
 // perfect history) end to end: it places the object's volume, tracks every frame the toy car is
-// in, and its ATE follows the frames' noise (the bench's figures are in README.md).
+// in, and its ATE follows the frames' noise (the bench's figures: docs/benchmarks.md).
 #include <regex>
 
 #include "test_support.h"
