@@ -7,6 +7,8 @@
 
 #include <cmath>
 
+#include "common/error.h"
+
 namespace emf::io::synth {
 namespace {
 
@@ -58,6 +60,15 @@ TEST(MotionPlan, RockersRollWithoutSliding) {
     EXPECT_LT(std::fabs(b.x() - a.x()) / dt, 1e-3) << t;
   }
   EXPECT_TRUE(p.endPose().isApprox(start, 1e-9));
+}
+
+TEST(MotionPlan, DriveWithoutTimeIsAnError) {
+  MotionPlan p(Eigen::Isometry3d::Identity());
+  auto loop = [](double u) {
+    return Eigen::Vector2d(std::cos(2 * kPi * u), std::sin(2 * kPi * u));
+  };
+  EXPECT_THROW(p.drive(-0.5, loop, 0.0, 0.3, 1.0, {}), InvalidArgument);
+  EXPECT_THROW(p.drive(0.0, loop, 0.0, 0.3, 1.0, {}), InvalidArgument);
 }
 
 TEST(MotionPlan, DriveStaysOnItsLoopWithinLimitsAndStops) {

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <string>
+
+#include "common/error.h"
 
 namespace emf::io::synth {
 namespace {
@@ -121,6 +124,10 @@ void MotionPlan::drift(double duration_s, const Eigen::Vector3d& amplitude_m,
 void MotionPlan::drive(double duration_s, const std::function<Eigen::Vector2d(double)>& curve,
                        double u0, double max_speed_mps, double max_yaw_rate,
                        const std::vector<Eigen::Vector2d>& stops) {
+  if (!(duration_s > 0.0)) {
+    throw InvalidArgument("MotionPlan::drive: duration " + std::to_string(duration_s) +
+                          " s; a drive needs a positive duration");
+  }
   auto table = std::make_shared<DriveTable>();
   constexpr int kSamples = 2048;
   for (int i = 0; i <= kSamples; ++i) {

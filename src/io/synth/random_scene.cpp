@@ -36,10 +36,14 @@ struct Attempt {
   double score = -1.0;  // the smallest visibility margin over the objects (>= 0: accepted)
 };
 
+constexpr int kMinPlanFrames = 300;
+
 Attempt generate(uint64_t seed, int attempt, const RandomSceneOptions& options, unsigned families) {
   Rng rng(streamSeed(seed, kSceneStream, static_cast<uint64_t>(attempt)));
   Layout L;
-  L.T = options.frames / kFps;
+  // Motions are planned over at least kMinPlanFrames: a shorter sequence shows their start
+  // (a drive needs time for its ramps and stops after the rests before it).
+  L.T = std::max(options.frames, kMinPlanFrames) / kFps;
   Attempt out;
   Scene& scene = out.result.scene;
   scene.name = "random";
