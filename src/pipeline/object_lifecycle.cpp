@@ -1,4 +1,4 @@
-// The object half of SlamSystem (METHOD.md steps 2-6): E-step volumes, object tracking,
+// The object half of SlamSystem (docs/method.md#per-frame): E-step volumes, object tracking,
 // weighted integration of every volume, detection matching, creation, growth and deletion.
 // The rules themselves are the pure functions of em/object_rules.h.
 #include <algorithm>
