@@ -1,6 +1,7 @@
-// The object lifecycle rules of docs/method.md#detection-frames and #visibility-and-deletion as pure functions on masks, boxes and point
-// sets, so each rule is testable on a constructed case. The pipeline (src/pipeline/) applies
-// them with the ray-cast object masks and the association maps of the current frame.
+// The object lifecycle rules of docs/method.md#detection-frames and #visibility-and-deletion as
+// pure functions on masks, boxes and point sets, so each rule is testable on a constructed case.
+// The pipeline (src/pipeline/) applies them with the ray-cast object masks and the association maps
+// of the current frame.
 #pragma once
 
 #include <Eigen/Geometry>

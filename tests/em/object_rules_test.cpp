@@ -1,4 +1,5 @@
-// Each lifecycle rule of docs/method.md#detection-frames and #visibility-and-deletion on a constructed case.
+// Each lifecycle rule of docs/method.md#detection-frames and #visibility-and-deletion on a
+// constructed case.
 #include "em/object_rules.h"
 
 #include <cmath>

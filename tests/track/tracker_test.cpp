@@ -458,7 +458,8 @@ void expectConvergence(cl::Context& ctx, const SyntheticWorld& world, const Trac
 }
 
 TEST_F(TrackerTest, ConvergesFromFiveCmFiveDegreesPaperSettings) {
-  TrackOptions paper;  // docs/method.md#tracking: all pixels, plain LM until |h| <= 1e-8 or 100 iterations
+  // docs/method.md#tracking: all pixels, plain LM until |h| <= 1e-8 or 100 iterations.
+  TrackOptions paper;
   paper.coarse_levels = 0;
   paper.early_exit_step = 0.0;
   paper.max_step_scale = 1.0;
