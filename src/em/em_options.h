@@ -67,7 +67,7 @@ struct ObjectOptions {
   double min_mean_association = 0.1;
   /// An object whose tracking failed on more frames in a row than this (camera tracked) is
   /// retired: its pose is stale. 0 = never (the paper has no such rule).
-  int max_lost_frames = 15;
+  int max_lost_frames = 0;
   /// An object with this fraction of its own ray cast behind nearer measured surfaces is
   /// hidden: held still in the world, not tracked or integrated, not retired as lost. 0 = off
   /// (the paper, which deletes it as invisible); docs/method.md#hidden-and-leaving-objects.
@@ -80,7 +80,7 @@ struct ObjectOptions {
   /// An object with less than this fraction of its projection inside the image is leaving the
   /// view: held like a hidden one (the sliver in view slides along the border), but still
   /// retired when invisible. 0 = off (the paper).
-  double leaving_fraction = 0.5;
+  double leaving_fraction = 0.0;
   /// An object held as leaving is tracked again once at least this fraction of its projection
   /// is inside the image (at least leaving_fraction).
   double in_view_again_fraction = 0.6;
