@@ -67,7 +67,7 @@ struct ObjectOptions {
   double min_mean_association = 0.1;
   /// An object whose tracking failed on more frames in a row than this (camera tracked) is
   /// retired: its pose is stale. 0 = never (the paper has no such rule).
-  int max_lost_frames = 0;
+  int max_lost_frames = 15;
   /// An object with this fraction of its own ray cast behind nearer measured surfaces is
   /// hidden: held still in the world, not tracked or integrated, not retired as lost. 0 = off
   /// (the paper, which deletes it as invisible); docs/method.md#hidden-and-leaving-objects.
