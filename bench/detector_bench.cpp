@@ -3,7 +3,7 @@
 //      stand-in detector that takes --detector-ms, the SLAM thread spending --slam-ms per frame:
 //      submit() time per call, frames handed over / dropped, results and how late they come
 //   2. ObjectOutputs per frame at 3 objects: add(), writeFrameImages() (overlay + q_0..q_3 PNGs),
-//      and writing the trajectories at the end
+//      (which appends and flushes the trajectories) and syncing them to disk at the end
 // Usage: detector_bench [--frames N] [--detector-ms MS] [--slam-ms MS] [--out DIR]
 #include <algorithm>
 #include <chrono>
@@ -144,12 +144,12 @@ void outputs(int w, int h, int frames, const std::string& dir) {
     image_ms.push_back(msSince(t0));
   }
   const auto t0 = Clock::now();
-  out.writeTrajectories();
+  out.sync();
   const double traj_ms = msSince(t0);
   const Figures a = figures(add_us), im = figures(image_ms);
   std::printf(
       "outputs %dx%d, 3 objects, %d frames: add() %.2f us median; images (overlay + 4 q maps) "
-      "%.1f ms median, %.1f ms p99; 3 trajectories written in %.1f ms\n",
+      "%.1f ms median, %.1f ms p99; 3 trajectories synced to disk in %.1f ms\n",
       w, h, frames, a.median, im.median, im.p99, traj_ms);
 }
 

@@ -389,17 +389,12 @@ int main(int argc, char** argv) {
         // ---- emf ----
         SystemFigures e;
         std::vector<std::string> cmd = {
-            a.emf,
-            "run",
-            "--source",
-            "tum:" + frames_dir + "?depth_scale=5000",
-            "--out",
-            dir + "/emf",
-            "--quiet",
-            "--set",
-            "map.background_voxel_m=" + fmt(a.res.voxel_m, 3),
-            "--set",
-            "map.background_resolution=" + std::to_string(a.res.volume_voxels)};
+            a.emf,      "run",
+            "--source", "tum:" + frames_dir + "?depth_scale=5000",
+            "--out",    dir + "/emf",
+            "--force",  "--quiet",
+            "--set",    "map.background_voxel_m=" + fmt(a.res.voxel_m, 3),
+            "--set",    "map.background_resolution=" + std::to_string(a.res.volume_voxels)};
         if (!a.config.empty()) cmd.insert(cmd.begin() + 2, {"--config", a.config});
         for (const auto& s : a.sets) cmd.insert(cmd.end(), {"--set", s});
         const ChildResult er = runChild(cmd, dir + "/emf.log");

@@ -14,6 +14,6 @@ out=out/default
 mkdir -p "$out"
 ./build/bin/emf info --no-kernels | tee "$out/info.txt"
 ./build/bin/emf synth room --frames "$frames" --out "$out/input" --force
-./build/bin/emf run --source "tum:$out/input" --out "$out" "$@"
+./build/bin/emf run --source "tum:$out/input" --out "$out" --force "$@"
 ./build/bin/emf eval --gt "$out/input" --est "$out" --out "$out"
 echo "emf: outputs in $(pwd)/$out (camera.txt, background.ply, run.json, eval.json, eval.png)"

@@ -1,7 +1,11 @@
 // `emf run`: the SLAM on a source (dataset, synthetic world or sensor), writing camera.txt,
 // the background mesh, per-object trajectories and meshes, optional per-frame images and a run
-// summary into the output folder. An error in the middle of the run, Ctrl-C or SIGTERM still
-// write the outputs of the frames done so far (run.json then has "error").
+// summary into the output folder. Nothing done is lost: the folder is claimed before the first
+// frame, the trajectories are appended and flushed every frame, run.json is rewritten at
+// checkpoints with the run's status; an error, Ctrl-C, SIGTERM or SIGHUP still write the meshes
+// and the final run.json, and a SIGKILL leaves the trajectories of every frame processed.
+#include <unistd.h>
+
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -13,34 +17,41 @@
 #include "cli/load_config.h"
 #include "common/error.h"
 #include "common/log.h"
+#include "io/atomic_output.h"
 #include "io/frame_source.h"
-#include "io/trajectory.h"
+#include "io/trajectory_stream.h"
 #include "map/raycaster.h"
 #include "pipeline/detector_plugin.h"
 #include "pipeline/object_outputs.h"
 #include "pipeline/plugin_search_path.h"
 #include "pipeline/progress.h"
+#include "pipeline/run_folder.h"
 #include "pipeline/run_outputs.h"
 #include "pipeline/slam_system.h"
 
 namespace emf::cli {
 
 int cmdRun(const std::vector<std::string>& args) {
+  // First: main() records signals from its first instruction; this guard takes over, so a
+  // Ctrl-C during the parsing or the start-up still ends in a consistent output folder.
+  const InterruptGuard interrupt;
   std::string source, config_file, out_dir = "out/run", frames_text, detector, detector_config;
   std::vector<std::string> sets;
-  bool quiet = false;
+  bool quiet = false, force = false;
   ArgParser p("run",
               "Runs the SLAM on a source and writes camera.txt (TUM format, the source's "
               "timestamps), background.ply, object-<id>.txt (T_object_camera) and object-<id>.ply "
               "(object frame) per object, images/ when output.write_images is set, and run.json "
-              "(frames, lost frames, ms per frame per stage, memory, device, objects, detector) "
-              "into the output folder. Without --source, source.uri of the configuration is used "
-              "(default: the synthetic static room).");
+              "(run id, status, frames, lost frames, ms per frame per stage, memory, device, "
+              "objects, detector) into the output folder. The trajectories are written as the "
+              "frames are processed; a folder holds one run. Without --source, source.uri of the "
+              "configuration is used (default: the synthetic static room).");
   p.option("source", &source, "URI",
            "tum:<dir>, cofusion:<dir>, klg:<file>, synth:<preset>, openni2:[uri], v4l2:<dev>");
   p.option("config", &config_file, "FILE", "YAML configuration (conf/*.yaml)");
   p.repeated("set", &sets, "SECTION.KEY=VALUE", "override one configuration key");
   p.option("out", &out_dir, "DIR", "output folder (default out/run)");
+  p.flag("force", &force, "replace the outputs of an earlier run in the output folder");
   p.option("frames", &frames_text, "N", "stop after N frames (source.max_frames)");
   p.option("detector", &detector, "NAME|PATH",
            "detector plugin (detector.plugin): a name looked up on detector.search_path, "
@@ -49,10 +60,6 @@ int cmdRun(const std::vector<std::string>& args) {
            "configuration string for the plugin (detector.plugin_config)");
   p.flag("quiet", &quiet, "no progress line");
   if (auto code = p.parse(args)) return *code;
-  // From here on the first Ctrl-C / SIGTERM ends the run after the current frame and the outputs
-  // are still written; one during start-up (OpenCL kernel builds, opening a sensor) lets the
-  // start-up finish and writes the outputs of zero frames. A second signal terminates at once.
-  const InterruptGuard interrupt;
   if (!frames_text.empty()) sets.push_back("source.max_frames=" + frames_text);
   Config config = loadConfig(config_file, sets);
   // Set directly, not through --set: plugin configuration strings may hold '=', ':' or quotes.
@@ -66,14 +73,43 @@ int cmdRun(const std::vector<std::string>& args) {
                                 pipeline::pluginSearchPath(config.detector));
   }
 
-  cl::Context ctx(config.cl);
-  std::unique_ptr<io::FrameSource> src = io::openSource(source, config.source);
+  // The folder before the device and the source: an unwritable --out fails in milliseconds.
+  const pipeline::RunFolder folder(out_dir, force);
+  pipeline::RunInfo info;
+  info.run_id = folder.runId();
+  info.started_utc = folder.startedUtc();
+  info.pid = static_cast<int64_t>(getpid());
+  info.source_uri = source;
+  info.config_file = config_file;
+  const std::string run_json = folder.path("run.json");
+  io::writeFileAtomically(run_json, pipeline::startingSummaryJson(info));
+  io::TrajectoryStream camera(
+      folder.path("camera.txt"),
+      "camera trajectory T_world_camera (emf run " + info.run_id + ", source " + source + ")");
+
+  std::unique_ptr<cl::Context> ctx_ptr;
+  std::unique_ptr<io::FrameSource> src;
+  std::unique_ptr<pipeline::SlamSystem> slam_ptr;
+  try {
+    ctx_ptr = std::make_unique<cl::Context>(config.cl);
+    src = io::openSource(source, config.source);
+    info.source_description = src->describe();
+    logInfo("source: ", src->describe(), "; device: ", ctx_ptr->device().device_name);
+    slam_ptr = std::make_unique<pipeline::SlamSystem>(*ctx_ptr, config, src->intrinsics(), source);
+  } catch (const std::exception& e) {
+    // No SLAM to summarise: run.json keeps the start-up fields and says why it failed.
+    info.status = pipeline::RunStatus::kFailed;
+    info.error = std::string("start-up failed: ") + e.what();
+    io::writeFileAtomically(run_json, pipeline::startingSummaryJson(info));
+    throw;
+  }
+  cl::Context& ctx = *ctx_ptr;
+  pipeline::SlamSystem& slam = *slam_ptr;
   const io::Intrinsics k = src->intrinsics();
-  logInfo("source: ", src->describe(), "; device: ", ctx.device().device_name);
-  pipeline::SlamSystem slam(ctx, config, k, source);
-  pipeline::ObjectOutputs objects(out_dir, config.output.binary_ply);
+  pipeline::ObjectOutputs objects(out_dir, config.output.binary_ply, info.run_id);
   slam.setDeletionHook(
       [&objects](const pipeline::TrackedObject& o) { objects.onObjectDeleted(o.id, *o.volume); });
+  const auto volume_of = [&slam](int id) { return slam.volume(id); };
   // Images: the object ids are ray cast here at each frame's estimated pose; the association
   // maps are those of the frame's last E-step.
   std::unique_ptr<map::RayCaster> id_renderer;
@@ -86,16 +122,30 @@ int cmdRun(const std::vector<std::string>& args) {
     total = config.source.max_frames;
   }
   pipeline::Progress progress(total, false);
-  io::Trajectory camera;
-  pipeline::RunInfo info;
-  info.source_uri = source;
-  info.source_description = src->describe();
-  info.config_file = config_file;
   const auto t0 = std::chrono::steady_clock::now();
+  // run.json with the counts so far (and the meshes when asked): survives any later kill.
+  const auto refreshSummary = [&]() {
+    info.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    info.objects = objects.summaries();
+    if (!config.detector.plugin.empty()) info.detector = slam.detectorStats();
+    info.source_dropped_frames = src->droppedFrames();
+  };
+  const auto checkpoint = [&](int64_t frames_done) {
+    camera.sync();
+    objects.sync();
+    const int mesh_every = config.output.mesh_checkpoint_frames;
+    if (mesh_every > 0 && frames_done % mesh_every == 0) {
+      pipeline::writeBackgroundMesh(out_dir, slam, config.output.binary_ply);
+      objects.writeLiveMeshes(volume_of);
+    }
+    refreshSummary();
+    io::writeFileAtomically(run_json, pipeline::runSummaryJson(slam, ctx, info));
+  };
   io::Frame frame;
   int64_t n = 0;
   std::string last_written_stamp;
   try {
+    checkpoint(0);
     while (!interrupt.requested() &&
            (config.source.max_frames == 0 || n < config.source.max_frames) && src->next(frame)) {
       const pipeline::FrameOutcome o = slam.process(frame);
@@ -105,8 +155,7 @@ int cmdRun(const std::vector<std::string>& args) {
         logWarning("frame ", o.index, " (t=", frame.timestamp_text,
                    "): tracking lost: ", o.loss_reason,
                    "; not integrated, keeping the last good pose");
-      } else if (camera.empty() || frame.timestamp > camera.stamps.back()) {
-        camera.append(frame.timestamp, o.T_world_camera);
+      } else if (camera.append(frame.timestamp, o.T_world_camera)) {
         last_written_stamp = frame.timestamp_text;
       } else {
         // Tracked and fused, but a TUM file cannot hold a stamp that is not after the last.
@@ -133,8 +182,15 @@ int cmdRun(const std::vector<std::string>& args) {
         objects.writeFrameImages(o, frame.color, ids, maps);
       }
       ++n;
+      if (n % config.output.checkpoint_frames == 0) checkpoint(n);
       if (!quiet) {
-        progress.update(n, info.lost.empty() ? "" : "lost " + std::to_string(info.lost.size()));
+        std::string status;
+        if (!info.lost.empty()) status = "lost " + std::to_string(info.lost.size());
+        if (const int64_t dropped = src->droppedFrames(); dropped > 0) {
+          status +=
+              (status.empty() ? "" : ", ") + std::string("dropped ") + std::to_string(dropped);
+        }
+        progress.update(n, status);
       }
     }
   } catch (const std::exception& e) {
@@ -144,31 +200,48 @@ int cmdRun(const std::vector<std::string>& args) {
   if (interrupt.requested() && info.error.empty()) {
     info.error = std::string("interrupted by ") + interrupt.signalName() + " after " +
                  std::to_string(n) + " frames";
+    info.status = pipeline::RunStatus::kInterrupted;
+    info.signal = interrupt.signalName();
+  } else {
+    info.status =
+        info.error.empty() ? pipeline::RunStatus::kFinished : pipeline::RunStatus::kFailed;
   }
   progress.finish();
-  info.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::string output_error;
   try {
-    objects.finish([&slam](int id) { return slam.volume(id); });
+    objects.finish(volume_of);
   } catch (const std::exception& e) {
-    output_error = std::string("object outputs: ") + e.what();
-    if (!info.error.empty()) info.error += "; " + output_error;
+    const std::string output_error = std::string("object outputs: ") + e.what();
+    info.error = info.error.empty() ? output_error : info.error + "; " + output_error;
+    if (info.status == pipeline::RunStatus::kFinished) info.status = pipeline::RunStatus::kFailed;
   }
-  info.objects = objects.summaries();
-  if (!config.detector.plugin.empty()) info.detector = slam.detectorStats();
-  pipeline::writeRunOutputs(out_dir, slam, ctx, camera, info, config.output.binary_ply);
-  if (!info.error.empty()) {
+  refreshSummary();
+  std::string final_error;
+  try {
+    pipeline::writeFinalOutputs(out_dir, slam, ctx, info, config.output.binary_ply);
+  } catch (const std::exception& e) {
+    final_error = e.what();
+  }
+  const int64_t dropped = src->droppedFrames();
+  if (dropped > 0) {
+    logWarning("the source dropped ", dropped,
+               " frame(s) before emf read them (a live sensor running ahead of the SLAM; "
+               "run.json source.dropped_frames)");
+  }
+  if (!info.error.empty() || !final_error.empty()) {
+    std::string message = info.error;
+    if (!final_error.empty() && message.find(final_error) == std::string::npos) {
+      message += (message.empty() ? "" : "; ") + final_error;
+    }
     std::fprintf(stderr, "emf run: error: %s\n(outputs of the frames done so far are in %s)\n",
-                 info.error.c_str(), std::filesystem::absolute(out_dir).string().c_str());
+                 message.c_str(), std::filesystem::absolute(out_dir).string().c_str());
     return interrupt.requested() ? interrupt.exitCode() : kExitFailure;
   }
-  if (!output_error.empty()) throw IoError(output_error);
-
   const auto s = slam.timer().summary();
-  std::printf("emf run: %lld frames (%lld lost) in %.1f s, %.1f ms/frame median (p90 %.1f)\n",
-              static_cast<long long>(slam.framesProcessed()),
-              static_cast<long long>(slam.framesLost()), info.wall_s, s.at("total").median_ms,
-              s.at("total").p90_ms);
+  std::printf(
+      "emf run: %lld frames (%lld lost%s) in %.1f s, %.1f ms/frame median (p90 %.1f)\n",
+      static_cast<long long>(slam.framesProcessed()), static_cast<long long>(slam.framesLost()),
+      dropped > 0 ? (", " + std::to_string(dropped) + " dropped by the source").c_str() : "",
+      info.wall_s, s.at("total").median_ms, s.at("total").p90_ms);
   if (info.frames_not_in_trajectories > 0) {
     std::printf(
         "  %lld tracked frame(s) left out of camera.txt: their timestamp was not after the last "

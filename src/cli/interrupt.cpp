@@ -1,5 +1,7 @@
 #include "cli/interrupt.h"
 
+#include <unistd.h>
+
 #include <atomic>
 #include <csignal>
 #include <cstring>
@@ -9,43 +11,72 @@
 namespace emf::cli {
 namespace {
 
+constexpr int kSignals[] = {SIGINT, SIGTERM, SIGHUP};
+constexpr int kNumSignals = 3;
+
 volatile std::sig_atomic_t g_signal = 0;
-std::atomic<bool> g_installed{false};
-struct sigaction g_previous_int, g_previous_term;
+std::atomic<bool> g_early{false};
+std::atomic<bool> g_guarded{false};
+struct sigaction g_previous[kNumSignals];
 
 extern "C" void onSignal(int signal) {
   if (g_signal != 0) {
-    // Second signal: the user insists; terminate with the default action.
-    std::signal(signal, SIG_DFL);
-    std::raise(signal);
+    // Only async-signal-safe calls here: write(2), no allocation, no stdio.
+    static const char kMessage[] =
+        "\nemf: already stopping after the current frame and writing the outputs\n";
+    const ssize_t ignored = write(STDERR_FILENO, kMessage, sizeof(kMessage) - 1);
+    (void)ignored;
     return;
   }
   g_signal = signal;
 }
 
-}  // namespace
-
-InterruptGuard::InterruptGuard() {
-  if (g_installed.exchange(true)) {
-    throw StateError("InterruptGuard: only one may exist at a time");
-  }
-  g_signal = 0;
+void install() {
   struct sigaction action;
   std::memset(&action, 0, sizeof(action));
   action.sa_handler = onSignal;
   sigemptyset(&action.sa_mask);
   action.sa_flags = SA_RESTART;  // blocking reads resume; the loop checks requested()
-  // A signal the parent set to be ignored (e.g. SIGINT of a background job) stays ignored.
-  sigaction(SIGINT, nullptr, &g_previous_int);
-  sigaction(SIGTERM, nullptr, &g_previous_term);
-  if (g_previous_int.sa_handler != SIG_IGN) sigaction(SIGINT, &action, nullptr);
-  if (g_previous_term.sa_handler != SIG_IGN) sigaction(SIGTERM, &action, nullptr);
+  for (int i = 0; i < kNumSignals; ++i) {
+    sigaction(kSignals[i], nullptr, &g_previous[i]);
+    // A signal the parent set to be ignored (e.g. SIGINT of a background job) stays ignored.
+    if (g_previous[i].sa_handler != SIG_IGN) sigaction(kSignals[i], &action, nullptr);
+  }
+}
+
+void restore() {
+  for (int i = 0; i < kNumSignals; ++i) sigaction(kSignals[i], &g_previous[i], nullptr);
+}
+
+}  // namespace
+
+void catchInterruptsEarly() {
+  if (g_early.exchange(true)) return;
+  g_signal = 0;
+  install();
+}
+
+void releaseEarlyInterrupts() {
+  if (!g_early.exchange(false)) return;
+  restore();
+  if (g_signal != 0) std::raise(static_cast<int>(g_signal));
+}
+
+InterruptGuard::InterruptGuard() {
+  if (g_guarded.exchange(true)) {
+    throw StateError("InterruptGuard: only one may exist at a time");
+  }
+  // Installed early by main(): keep the handlers and any signal already recorded.
+  if (!g_early.load()) {
+    g_signal = 0;
+    install();
+  }
 }
 
 InterruptGuard::~InterruptGuard() {
-  sigaction(SIGINT, &g_previous_int, nullptr);
-  sigaction(SIGTERM, &g_previous_term, nullptr);
-  g_installed.store(false);
+  g_early.store(false);
+  restore();
+  g_guarded.store(false);
 }
 
 bool InterruptGuard::requested() const { return g_signal != 0; }
@@ -58,6 +89,8 @@ const char* InterruptGuard::signalName() const {
       return "SIGINT";
     case SIGTERM:
       return "SIGTERM";
+    case SIGHUP:
+      return "SIGHUP";
     default:
       return "no signal";
   }

@@ -1,5 +1,6 @@
 // `emf`: the command-line tool. Dispatches to subcommands; every error is a message on stderr
 // and a non-zero exit code (1 = failure, 2 = usage).
+#include <csignal>
 #include <cstdio>
 #include <exception>
 #include <string>
@@ -7,6 +8,7 @@
 
 #include "cli/arg_parser.h"
 #include "cli/commands.h"
+#include "cli/interrupt.h"
 #include "common/config.h"
 
 namespace {
@@ -42,6 +44,12 @@ void printUsage(FILE* out) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Before anything else: a Ctrl-C while `emf run` starts must not kill it without its outputs.
+  emf::cli::catchInterruptsEarly();
+  // A file size limit (ulimit -f) makes the write fail with EFBIG, which names the file, instead
+  // of killing the process without its outputs.
+  std::signal(SIGXFSZ, SIG_IGN);
+  if (argc < 2 || std::string(argv[1]) != "run") emf::cli::releaseEarlyInterrupts();
   if (argc < 2) {
     printUsage(stderr);
     return emf::cli::kExitUsage;

@@ -23,6 +23,10 @@ class FrameSource {
   virtual int64_t size() const { return -1; }
   /// True for live sensors (frames arrive in real time; drop_oldest makes sense).
   virtual bool isLive() const { return false; }
+  /// Frames the source itself dropped before next() returned them so far: a live sensor (or the
+  /// virtual device) delivering faster than the caller reads, seen as gaps in its frame
+  /// numbers. 0 for recorded sources.
+  virtual int64_t droppedFrames() const { return 0; }
   /// Human-readable description ("TUM folder /data/x, 300 frames").
   virtual std::string describe() const = 0;
   /// Releases the device/files. Also done by the destructor.

@@ -68,23 +68,30 @@ Trajectory readTrajectory(const std::string& path) {
   return traj;
 }
 
-void writeTrajectory(const std::string& path, const Trajectory& trajectory,
-                     const std::string& comment) {
+std::string tumLine(double stamp, const Eigen::Isometry3d& T) {
+  // Normalised: a rotation composed over many frames drifts from orthonormal by round-off,
+  // and readers (ours included) reject quaternions whose norm is not 1.
+  Eigen::Quaterniond q(T.rotation());
+  q.normalize();
+  if (q.w() < 0) q.coeffs() = -q.coeffs();
+  const Eigen::Vector3d t = T.translation();
+  char line[256];
+  std::snprintf(line, sizeof(line), "%.6f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", stamp, t.x(),
+                t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+  return line;
+}
+
+std::string tumHeader(const std::string& comment) {
   std::string out;
   if (!comment.empty()) out += "# " + comment + "\n";
-  out += "# timestamp tx ty tz qx qy qz qw\n";
-  char line[256];
+  return out + "# timestamp tx ty tz qx qy qz qw\n";
+}
+
+void writeTrajectory(const std::string& path, const Trajectory& trajectory,
+                     const std::string& comment) {
+  std::string out = tumHeader(comment);
   for (size_t i = 0; i < trajectory.size(); ++i) {
-    const Eigen::Isometry3d& T = trajectory.poses[i];
-    // Normalised: a rotation composed over many frames drifts from orthonormal by round-off,
-    // and readers (ours included) reject quaternions whose norm is not 1.
-    Eigen::Quaterniond q(T.rotation());
-    q.normalize();
-    if (q.w() < 0) q.coeffs() = -q.coeffs();
-    const Eigen::Vector3d t = T.translation();
-    std::snprintf(line, sizeof(line), "%.6f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n",
-                  trajectory.stamps[i], t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
-    out += line;
+    out += tumLine(trajectory.stamps[i], trajectory.poses[i]);
   }
   writeFileAtomically(path, out);
 }

@@ -38,6 +38,12 @@ Trajectory readTrajectory(const std::string& path);
 void writeTrajectory(const std::string& path, const Trajectory& trajectory,
                      const std::string& comment = "");
 
+/// One pose as a TUM line ("%.6f" timestamp, 9 decimals, unit quaternion with qw >= 0, '\n').
+std::string tumLine(double stamp, const Eigen::Isometry3d& pose);
+/// The comment lines a TUM file starts with: "# <comment>" (when not empty), then the column
+/// names.
+std::string tumHeader(const std::string& comment);
+
 /// One associated pair: indices into the first and second timestamp lists.
 struct StampMatch {
   size_t first = 0, second = 0;

@@ -6,8 +6,6 @@
 #include <filesystem>
 #include <map>
 #include <opencv2/imgproc.hpp>
-#include <regex>
-#include <set>
 
 #include "common/error.h"
 #include "common/log.h"
@@ -93,8 +91,8 @@ cv::Mat associationFalseColor(const cv::Mat& q) {
   return out;
 }
 
-ObjectOutputs::ObjectOutputs(std::string dir, bool binary_ply)
-    : dir_(std::move(dir)), binary_ply_(binary_ply) {}
+ObjectOutputs::ObjectOutputs(std::string dir, bool binary_ply, std::string run_id)
+    : dir_(std::move(dir)), binary_ply_(binary_ply), run_id_(std::move(run_id)) {}
 
 std::string ObjectOutputs::trajectoryName(int id) {
   return "object-" + std::to_string(id) + ".txt";
@@ -114,6 +112,22 @@ void ObjectOutputs::ensureDir(const std::string& dir) const {
   if (ec) throw IoError(dir + ": cannot create the output folder: " + ec.message());
 }
 
+void ObjectOutputs::appendPose(Track& t, double timestamp,
+                               const Eigen::Isometry3d& T_object_camera) {
+  if (!t.T_object_camera) {
+    ensureDir(dir_);
+    const int id = t.summary.id;
+    t.T_object_camera = std::make_unique<io::TrajectoryStream>(
+        dir_ + "/" + trajectoryName(id),
+        "object " + std::to_string(id) + " (" + t.summary.class_name +
+            "): T_object_camera, the camera pose in the object's frame (emf run" +
+            (run_id_.empty() ? "" : " " + run_id_) + ")");
+    t.summary.trajectory_file = trajectoryName(id);
+  }
+  // TUM files need increasing stamps: a repeated source timestamp keeps the first pose.
+  t.T_object_camera->append(timestamp, T_object_camera);
+}
+
 void ObjectOutputs::add(const FrameOutcome& outcome) {
   // Objects confirmed in this frame: their poses since creation come first.
   for (const ConfirmedObject& c : outcome.confirmed) {
@@ -129,9 +143,7 @@ void ObjectOutputs::add(const FrameOutcome& outcome) {
       s.last_frame = p.index;
       s.last_timestamp = p.timestamp;
       ++s.frames_tracked;
-      if (t.T_object_camera.empty() || p.timestamp > t.T_object_camera.stamps.back()) {
-        t.T_object_camera.append(p.timestamp, p.T_object_camera);
-      }
+      appendPose(t, p.timestamp, p.T_object_camera);
     }
   }
   for (const ObjectOutcome& o : outcome.objects) {
@@ -150,10 +162,7 @@ void ObjectOutputs::add(const FrameOutcome& outcome) {
         s.last_frame = outcome.index;
         s.last_timestamp = outcome.timestamp;
         ++s.frames_tracked;
-        // TUM files need increasing stamps: a repeated source timestamp keeps the first pose.
-        if (t.T_object_camera.empty() || outcome.timestamp > t.T_object_camera.stamps.back()) {
-          t.T_object_camera.append(outcome.timestamp, o.T_object_camera);
-        }
+        appendPose(t, outcome.timestamp, o.T_object_camera);
         break;
       case ObjectState::kLost:
         ++s.frames_lost;
@@ -233,50 +242,27 @@ void ObjectOutputs::writeFrameImages(const FrameOutcome& outcome, const cv::Mat&
   }
 }
 
+void ObjectOutputs::writeLiveMeshes(const std::function<const map::Volume*(int id)>& volume_of) {
+  for (auto& [id, t] : tracks_) {
+    if (t.summary.deleted || !volume_of) continue;
+    if (const map::Volume* v = volume_of(id)) onObjectDeleted(id, *v);
+  }
+}
+
 void ObjectOutputs::finish(const std::function<const map::Volume*(int id)>& volume_of) {
   for (auto& [id, t] : tracks_) {
     if (t.summary.deleted && t.summary.mesh_file.empty()) {
       logWarning("object ", id, " was deleted in frame ", t.summary.deleted_frame,
                  " without onObjectDeleted(): no ", meshName(id), " (its volume is gone)");
     }
-    if (t.summary.deleted || !volume_of) continue;
-    if (const map::Volume* v = volume_of(id)) onObjectDeleted(id, *v);
   }
-  writeTrajectories();
-  removeStaleObjectFiles();
+  writeLiveMeshes(volume_of);
+  sync();
 }
 
-void ObjectOutputs::removeStaleObjectFiles() const {
-  std::set<std::string> written;
-  for (const auto& [id, t] : tracks_) {
-    written.insert(t.summary.trajectory_file);
-    written.insert(t.summary.mesh_file);
-  }
-  static const std::regex kObjectFile("object-[0-9]+\\.(txt|ply)");
-  std::error_code ec;
-  for (const auto& e : std::filesystem::directory_iterator(dir_, ec)) {
-    const std::string name = e.path().filename().string();
-    if (!e.is_regular_file() || !std::regex_match(name, kObjectFile) || written.count(name)) {
-      continue;
-    }
-    std::error_code rm;
-    std::filesystem::remove(e.path(), rm);
-    if (rm) {
-      logWarning(dir_, "/", name, " is from an earlier run and cannot be removed: ", rm.message());
-    } else {
-      logInfo("removed ", dir_, "/", name, ", an output of an earlier run in this folder");
-    }
-  }
-}
-
-void ObjectOutputs::writeTrajectories() {
+void ObjectOutputs::sync() {
   for (auto& [id, t] : tracks_) {
-    if (t.T_object_camera.empty()) continue;
-    ensureDir(dir_);
-    io::writeTrajectory(dir_ + "/" + trajectoryName(id), t.T_object_camera,
-                        "object " + std::to_string(id) + " (" + t.summary.class_name +
-                            "): T_object_camera, the camera pose in the object's frame (emf run)");
-    t.summary.trajectory_file = trajectoryName(id);
+    if (t.T_object_camera) t.T_object_camera->sync();
   }
 }
 

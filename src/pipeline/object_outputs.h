@@ -1,8 +1,8 @@
-// Per-object outputs of a run (issue 6 part 4), accumulated from the per-frame FrameOutcomes and
-// written atomically into the run folder:
+// Per-object outputs of a run, from the per-frame FrameOutcomes, in the run folder:
 //   object-<id>.txt   TUM trajectory of T_object_camera (the camera's pose in the object's own
 //                     frame = its volume frame at creation, unchanged when the volume grows) at
-//                     the frames where the object was tracked
+//                     the frames where the object was tracked; appended and flushed as the
+//                     frames come (io::TrajectoryStream), so a killed run keeps them
 //   object-<id>.ply   the object's mesh in that same frame, metres: place it in the world
 //                     with T_world_object of the frame of interest (run.json has the last one);
 //                     written when the object is deleted (onObjectDeleted) or at the end
@@ -16,11 +16,12 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
-#include "io/trajectory.h"
+#include "io/trajectory_stream.h"
 #include "map/volume.h"
 #include "pipeline/slam_system.h"
 
@@ -67,11 +68,16 @@ cv::Mat associationFalseColor(const cv::Mat& q);
 /// Accumulates per-object trajectories and summaries over a run and writes their files.
 class ObjectOutputs {
  public:
-  /// Outputs go into `dir` (created when the first file is written); PLY binary or ASCII.
-  ObjectOutputs(std::string dir, bool binary_ply);
+  /// Outputs go into `dir` (created when the first file is written); PLY binary or ASCII;
+  /// `run_id` (RunFolder::runId) goes into each trajectory's header.
+  ObjectOutputs(std::string dir, bool binary_ply, std::string run_id = "");
 
-  /// Records one frame's objects (call for every FrameOutcome, in order).
+  /// Records one frame's objects (call for every FrameOutcome, in order) and appends their
+  /// poses to object-<id>.txt (created at an object's first pose). Throws IoError when a
+  /// trajectory cannot be written.
   void add(const FrameOutcome& outcome);
+  /// Asks the disk to keep every trajectory written so far (fdatasync). Throws IoError.
+  void sync();
 
   /// Writes object-<id>.ply from `volume` now: call before an object's volume is freed.
   /// Throws IoError when the file cannot be written.
@@ -88,15 +94,11 @@ class ObjectOutputs {
                         const cv::Mat& object_ids,
                         const std::vector<AssociationImage>& association);
 
-  /// End of the run (or an interrupted run): writes object-<id>.ply for every object still alive
-  /// whose volume `volume_of(id)` returns (nullptr = skip), then every trajectory, then removes
-  /// an earlier run's object files (removeStaleObjectFiles).
+  /// Writes object-<id>.ply for every object still alive whose volume `volume_of(id)` returns
+  /// (nullptr = skip).
+  void writeLiveMeshes(const std::function<const map::Volume*(int id)>& volume_of);
+  /// End of the run (or an interrupted run): writeLiveMeshes, then syncs the trajectories.
   void finish(const std::function<const map::Volume*(int id)>& volume_of);
-  /// Writes object-<id>.txt for every object tracked in at least one frame.
-  void writeTrajectories();
-  /// Removes object-<id>.txt / .ply files in the folder that this run did not write (an earlier
-  /// run's objects would otherwise be scored by `emf eval` as this run's).
-  void removeStaleObjectFiles() const;
 
   /// Summaries of every object seen so far, by increasing id.
   std::vector<ObjectSummary> summaries() const;
@@ -110,12 +112,14 @@ class ObjectOutputs {
  private:
   struct Track {
     ObjectSummary summary;
-    io::Trajectory T_object_camera;
+    std::unique_ptr<io::TrajectoryStream> T_object_camera;  // null until the first pose
   };
   void ensureDir(const std::string& dir) const;
+  void appendPose(Track& track, double timestamp, const Eigen::Isometry3d& T_object_camera);
 
   std::string dir_;
   bool binary_ply_;
+  std::string run_id_;
   std::map<int, Track> tracks_;
 };
 

@@ -52,10 +52,21 @@ struct OutputOptions {
   bool binary_ply = true;
   /// Write per-frame PNG overlays of object masks and association maps.
   bool write_images = false;
+  /// `emf run` rewrites run.json (status, counts) and syncs the trajectories to disk every this
+  /// many frames. The trajectories are flushed every frame regardless: a killed process loses
+  /// nothing; a power cut loses at most the frames since the last checkpoint.
+  int checkpoint_frames = 30;
+  /// `emf run` also rewrites background.ply and the live objects' meshes every this many frames
+  /// (0 = only at the end). A mesh costs about as much as a few frames' work.
+  int mesh_checkpoint_frames = 0;
 
   void bind(OptionBinder& b) {
     b.boolean("binary_ply", binary_ply, "binary PLY meshes (false = ASCII)");
     b.boolean("write_images", write_images, "per-frame PNG overlays and association maps");
+    b.integer("checkpoint_frames", checkpoint_frames, 1, 1000000, "frames",
+              "run.json rewritten and trajectories synced to disk every N frames");
+    b.integer("mesh_checkpoint_frames", mesh_checkpoint_frames, 0, 1000000, "frames",
+              "meshes rewritten every N frames (0 = at the end only)");
   }
 };
 

@@ -7,6 +7,7 @@
 #include "io/ply.h"
 #include "map/mesh.h"
 #include "map/volume_host_access.h"
+#include "pipeline/run_folder.h"
 
 namespace emf::pipeline {
 
@@ -68,10 +69,49 @@ nlohmann::json detectorStatsJson(const DetectorStats& s) {
           {"problems", problems}};
 }
 
-std::string runSummaryJson(const SlamSystem& slam, const cl::Context& ctx, const RunInfo& info) {
+const char* runStatusName(RunStatus status) {
+  switch (status) {
+    case RunStatus::kRunning:
+      return "running";
+    case RunStatus::kFinished:
+      return "finished";
+    case RunStatus::kInterrupted:
+      return "interrupted";
+    case RunStatus::kFailed:
+      return "failed";
+  }
+  return "unknown";
+}
+
+namespace {
+
+// The fields every run.json has, from its first version on.
+nlohmann::json statusJson(const RunInfo& info) {
   nlohmann::json j;
-  j["source"] = {{"uri", info.source_uri}, {"description", info.source_description}};
+  j["run_id"] = info.run_id;
+  j["status"] = runStatusName(info.status);
+  if (!info.signal.empty()) j["signal"] = info.signal;
+  j["pid"] = info.pid;
+  j["started_utc"] = info.started_utc;
+  j["updated_utc"] = utcNow();
+  j["source"] = {{"uri", info.source_uri},
+                 {"description", info.source_description},
+                 {"dropped_frames", info.source_dropped_frames}};
   j["config_file"] = info.config_file;
+  return j;
+}
+
+}  // namespace
+
+std::string startingSummaryJson(const RunInfo& info) {
+  nlohmann::json j = statusJson(info);
+  j["frames"] = 0;
+  if (!info.error.empty()) j["error"] = info.error;
+  return j.dump(2) + "\n";
+}
+
+std::string runSummaryJson(const SlamSystem& slam, const cl::Context& ctx, const RunInfo& info) {
+  nlohmann::json j = statusJson(info);
   j["frames"] = slam.framesProcessed();
   j["lost_frames"] = slam.framesLost();
   nlohmann::json lost = nlohmann::json::array();
@@ -122,27 +162,30 @@ std::string runSummaryJson(const SlamSystem& slam, const cl::Context& ctx, const
   return j.dump(2) + "\n";
 }
 
-void writeRunOutputs(const std::string& dir, SlamSystem& slam, const cl::Context& ctx,
-                     const io::Trajectory& camera, const RunInfo& info, bool binary_ply) {
+void writeBackgroundMesh(const std::string& dir, SlamSystem& slam, bool binary_ply) {
+  // Streamed from the mapped volume into the file: no host copy of the map, no mesh in memory.
+  const map::VolumeHostAccess access(slam.background());
+  io::PlyWriter ply(dir + "/background.ply", binary_ply);
+  map::extractMesh(access.view(), access.T_world_volume(), map::MeshOptions(), ply);
+  ply.commit();
+}
+
+void writeFinalOutputs(const std::string& dir, SlamSystem& slam, const cl::Context& ctx,
+                       const RunInfo& info, bool binary_ply) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) throw IoError(dir + ": cannot create the output folder: " + ec.message());
-  io::writeTrajectory(dir + "/camera.txt", camera,
-                      "camera trajectory T_world_camera (emf run, source " + info.source_uri + ")");
   // run.json is written even when the mesh cannot be (e.g. after a device error ended the run).
   std::string mesh_error;
   try {
-    // Streamed from the mapped volume into the file: no host copy of the map, no mesh in memory.
-    const map::VolumeHostAccess access(slam.background());
-    io::PlyWriter ply(dir + "/background.ply", binary_ply);
-    map::extractMesh(access.view(), access.T_world_volume(), map::MeshOptions(), ply);
-    ply.commit();
+    writeBackgroundMesh(dir, slam, binary_ply);
   } catch (const std::exception& e) {
     mesh_error = std::string("background.ply not written: ") + e.what();
   }
   RunInfo written = info;
   if (!mesh_error.empty()) {
     written.error = written.error.empty() ? mesh_error : written.error + "; " + mesh_error;
+    if (written.status == RunStatus::kFinished) written.status = RunStatus::kFailed;
   }
   io::writeFileAtomically(dir + "/run.json", runSummaryJson(slam, ctx, written));
   if (!mesh_error.empty() && info.error.empty()) throw IoError(dir + ": " + mesh_error);

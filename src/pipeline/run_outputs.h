@@ -1,5 +1,7 @@
-// What `emf run` (and the runtime) write into an output folder: camera.txt (TUM trajectory,
-// source timestamps), background.ply, run.json (summary). All files are written atomically.
+// What `emf run` writes into its output folder besides the trajectories (streamed, see
+// io::TrajectoryStream): run.json, the run's summary and status, rewritten atomically at start,
+// at every checkpoint and at the end; background.ply, written atomically at the end (and at
+// mesh checkpoints when asked).
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -21,8 +23,26 @@ struct LostFrame {
   std::string reason;
 };
 
+/// Where a run stands (run.json "status").
+enum class RunStatus {
+  kRunning,      // frames are being processed (a run killed hard keeps this status)
+  kFinished,     // the source ended or the frame limit was reached
+  kInterrupted,  // a signal stopped it after a frame (run.json "signal")
+  kFailed,       // an error stopped it (run.json "error")
+};
+const char* runStatusName(RunStatus status);
+
 /// Everything the summary reports besides what SlamSystem knows.
 struct RunInfo {
+  /// RunFolder::runId(), its start time and the process.
+  std::string run_id;
+  std::string started_utc;
+  int64_t pid = 0;
+  RunStatus status = RunStatus::kRunning;
+  /// "SIGINT", "SIGTERM", "SIGHUP" for an interrupted run.
+  std::string signal;
+  /// Frames the source dropped before emf saw them (a live sensor running ahead of the SLAM).
+  int64_t source_dropped_frames = 0;
   std::string source_uri;
   std::string source_description;
   std::string config_file;
@@ -55,8 +75,17 @@ nlohmann::json detectorStatsJson(const DetectorStats& stats);
 /// state alive|deleted, deleted_frame, deleted_reason}], "detector" counters, "error").
 std::string runSummaryJson(const SlamSystem& slam, const cl::Context& ctx, const RunInfo& info);
 
-/// Writes camera.txt, background.ply (binary or ASCII) and run.json into `dir` (created).
-void writeRunOutputs(const std::string& dir, SlamSystem& slam, const cl::Context& ctx,
-                     const io::Trajectory& camera, const RunInfo& info, bool binary_ply);
+/// run.json before the SLAM exists (device and kernels still starting): run id, status,
+/// source, pid, start time, 0 frames.
+std::string startingSummaryJson(const RunInfo& info);
+
+/// Writes `dir`/background.ply from the background volume (streamed, atomically). Throws.
+void writeBackgroundMesh(const std::string& dir, SlamSystem& slam, bool binary_ply);
+
+/// End of a run: writes background.ply (binary or ASCII), then run.json, into `dir`. run.json is
+/// written even when the mesh cannot be, with the mesh's error in "error"; then throws IoError
+/// for it unless the run had already failed.
+void writeFinalOutputs(const std::string& dir, SlamSystem& slam, const cl::Context& ctx,
+                       const RunInfo& info, bool binary_ply);
 
 }  // namespace emf::pipeline

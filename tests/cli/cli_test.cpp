@@ -88,12 +88,7 @@ const char* kTinyRun =
     " run --quiet --source 'synth:room?frames=3&width=80&height=60' --set map.memory_mb=32"
     " --set map.background_voxel_m=0.04 --set map.background_resolution=128";
 
-std::string readText(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using test::readText;
 
 TEST(CliRun, UnknownDetectorListsTheFoldersSearched) {
   const std::string out_dir = test::tempDir("run-nodet") + "/out";

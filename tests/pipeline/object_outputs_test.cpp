@@ -69,7 +69,6 @@ TEST(ObjectOutputs, TrajectoriesHoldTrackedFramesOnly) {
   const std::string dir = test::tempDir("objout-traj");
   ObjectOutputs out(dir, true);
   for (const FrameOutcome& f : sequence()) out.add(f);
-  out.writeTrajectories();
   const io::Trajectory car = io::readTrajectory(dir + "/object-1.txt");
   ASSERT_EQ(car.size(), 4u);
   const double xs[] = {0.0, 1.0, 3.0, 4.0};
@@ -100,7 +99,6 @@ TEST(ObjectOutputs, AConfirmedObjectsEarlierPosesComeFirst) {
     c.earlier.push_back({i, 10.0 + 0.5 * static_cast<double>(i), pose(i, 0.1 * i)});
   f2.confirmed = {c};
   out.add(f2);
-  out.writeTrajectories();
   const io::Trajectory box = io::readTrajectory(dir + "/object-3.txt");
   ASSERT_EQ(box.size(), 3u);
   for (size_t i = 0; i < 3; ++i) {
@@ -112,30 +110,28 @@ TEST(ObjectOutputs, AConfirmedObjectsEarlierPosesComeFirst) {
   EXPECT_EQ(out.summaries()[0].frames_tracked, 3);
 }
 
-TEST(ObjectOutputs, AnEarlierRunsObjectFilesAreRemovedOthersKept) {
-  // A folder that held a run with objects 1 and 7: this run tracks objects 1 and 2, so
-  // object-7.* would be scored by `emf eval` as this run's. Unrelated files stay.
-  const std::string dir = test::tempDir("objout-stale");
-  for (const char* name :
-       {"object-1.txt", "object-7.txt", "object-7.ply", "object-7.txt.bak", "notes.txt"}) {
-    std::ofstream(dir + "/" + name) << "old\n";
+TEST(ObjectOutputs, EachFramesPosesAreInTheFileAsSoonAsItIsAdded) {
+  // Nothing waits for the end of the run: after each add() the file holds every pose so far (a
+  // process killed now keeps them), under a header naming the run.
+  const std::string dir = test::tempDir("objout-stream");
+  ObjectOutputs out(dir, true, "20261127T000000Z-42");
+  size_t car_poses = 0;
+  for (const FrameOutcome& f : sequence()) {
+    out.add(f);
+    for (const ObjectOutcome& o : f.objects)
+      car_poses += (o.id == 1 && o.state == ObjectState::kTracked);
+    EXPECT_EQ(io::readTrajectory(dir + "/object-1.txt").size(), car_poses) << "frame " << f.index;
   }
-  ObjectOutputs out(dir, true);
-  for (const FrameOutcome& f : sequence()) out.add(f);
-  out.finish(nullptr);
-  EXPECT_EQ(io::readTrajectory(dir + "/object-1.txt").size(), 4u);  // rewritten
-  EXPECT_TRUE(std::filesystem::exists(dir + "/object-2.txt"));
-  EXPECT_FALSE(std::filesystem::exists(dir + "/object-7.txt"));
-  EXPECT_FALSE(std::filesystem::exists(dir + "/object-7.ply"));
-  EXPECT_TRUE(std::filesystem::exists(dir + "/object-7.txt.bak"));
-  EXPECT_TRUE(std::filesystem::exists(dir + "/notes.txt"));
+  EXPECT_EQ(car_poses, 4u);
+  EXPECT_NE(test::readText(dir + "/object-1.txt").find("emf run 20261127T000000Z-42"),
+            std::string::npos);
+  EXPECT_EQ(out.summaries()[0].trajectory_file, "object-1.txt");
 }
 
 TEST(ObjectOutputs, SummariesAndTheirJson) {
   const std::string dir = test::tempDir("objout-summary");
   ObjectOutputs out(dir, true);
   for (const FrameOutcome& f : sequence()) out.add(f);
-  out.writeTrajectories();
   const std::vector<ObjectSummary> s = out.summaries();
   ASSERT_EQ(s.size(), 2u);
   EXPECT_EQ(s[0].id, 1);
@@ -200,7 +196,6 @@ TEST(ObjectOutputs, RepeatedTimestampKeepsTheFirstPose) {
   b.timestamp = a.timestamp;
   out.add(a);
   out.add(b);
-  out.writeTrajectories();
   const io::Trajectory t = io::readTrajectory(dir + "/object-1.txt");
   ASSERT_EQ(t.size(), 1u);
   EXPECT_TRUE(t.poses[0].isApprox(pose(1.0, 0.1), kTumPoseTolerance));

@@ -1,5 +1,5 @@
 // run.json with the optional parts: the objects array, the detector counters and the error of an
-// interrupted run, through runSummaryJson / writeRunOutputs on a real (empty) SlamSystem.
+// interrupted run, through runSummaryJson / writeFinalOutputs on a real (empty) SlamSystem.
 #include "pipeline/run_outputs.h"
 
 #include <filesystem>
@@ -52,12 +52,13 @@ TEST_F(RunOutputs, SummaryHasObjectsDetectorAndError) {
   st.labelled_frames_skipped = 29;
   info.detector = st;
   info.error = "stopped after 22 frames: broken";
+  info.run_id = "20261127T000000Z-42";
+  info.status = RunStatus::kFailed;
   const std::string dir = test::tempDir("run-outputs");
-  writeRunOutputs(dir, slam, ctx(), io::Trajectory(), info, true);
-  std::ifstream in(dir + "/run.json");
-  std::stringstream text;
-  text << in.rdbuf();
-  const nlohmann::json j = nlohmann::json::parse(text.str());
+  writeFinalOutputs(dir, slam, ctx(), info, true);
+  const nlohmann::json j = nlohmann::json::parse(test::readText(dir + "/run.json"));
+  EXPECT_EQ(j["run_id"], "20261127T000000Z-42");
+  EXPECT_EQ(j["status"], "failed");
   ASSERT_EQ(j["objects"].size(), 1u);
   EXPECT_EQ(j["objects"][0]["id"], 3);
   EXPECT_EQ(j["objects"][0]["class"], "car");
@@ -69,13 +70,14 @@ TEST_F(RunOutputs, SummaryHasObjectsDetectorAndError) {
   EXPECT_EQ(j["detector"]["dropped_frames"], 5);
   EXPECT_EQ(j["detector"]["labelled_frames_skipped"], 29);
   EXPECT_EQ(j["error"], "stopped after 22 frames: broken");
-  EXPECT_TRUE(std::filesystem::exists(dir + "/camera.txt"));
   EXPECT_TRUE(std::filesystem::exists(dir + "/background.ply"));
   // Without them, the keys are absent (a run without objects support reads as before).
   const nlohmann::json plain = nlohmann::json::parse(runSummaryJson(slam, ctx(), RunInfo()));
   EXPECT_FALSE(plain.contains("objects"));
   EXPECT_FALSE(plain.contains("detector"));
   EXPECT_FALSE(plain.contains("error"));
+  EXPECT_EQ(plain["status"], "running");
+  EXPECT_FALSE(plain.contains("signal"));
   // The work counters are always there (no frames yet: count 0).
   for (const char* counter : {"track_iterations", "object_track_iterations", "object_track_pixels",
                               "integrated_blocks"}) {

@@ -3,6 +3,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <random>
 
 namespace emf::test {
@@ -43,6 +45,11 @@ std::string tempDir(const std::string& tag) {
   fs::create_directories(p);
   tempDirs().dirs.push_back(p);
   return p.string();
+}
+
+std::string readText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
 int runCommand(const std::string& command, std::string* output) {

@@ -15,6 +15,8 @@ namespace emf::test {
 std::string dataPath(const std::string& name);
 /// A fresh empty temporary folder, removed at process exit.
 std::string tempDir(const std::string& tag);
+/// The whole file as text ("" when it cannot be read).
+std::string readText(const std::string& path);
 /// Runs a shell command, returns its exit code and puts stdout+stderr into *output.
 int runCommand(const std::string& command, std::string* output);
 
