@@ -69,6 +69,7 @@ bool ReconnectingSource::next(io::Frame& frame) {
   try {
     ok = inner_->next(frame);
   } catch (const SensorDisconnected& e) {
+    dropped_before_ += inner_->droppedFrames();
     inner_.reset();
     state_ = static_cast<int>(SensorState::kDisconnected);
     ++disconnects_;

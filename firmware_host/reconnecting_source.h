@@ -45,6 +45,10 @@ class ReconnectingSource : public io::FrameSource {
   bool next(io::Frame& frame) override;
   int64_t size() const override { return -1; }
   bool isLive() const override { return true; }
+  /// Frames dropped by every sensor connection so far.
+  int64_t droppedFrames() const override {
+    return dropped_before_ + (inner_ ? inner_->droppedFrames() : 0);
+  }
   std::string describe() const override;
   void close() override;
 
@@ -66,6 +70,7 @@ class ReconnectingSource : public io::FrameSource {
   int disconnects_ = 0;
   int reconnects_ = 0;
   int64_t delivered_ = 0;
+  int64_t dropped_before_ = 0;  // droppedFrames() of the connections that ended
 };
 
 }  // namespace emf::fw

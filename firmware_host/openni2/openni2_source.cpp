@@ -444,6 +444,12 @@ bool Openni2Source::next(io::Frame& frame) {
   if (!live_ && delivered_ > 0 && depth.getFrameIndex() <= last_frame_index_) {
     return false;  // the recording rewound: its last frame was delivered before
   }
+  if (live_) {
+    // Numbered from 1 on a finite device: frames served before the first read count too.
+    const int index = depth.getFrameIndex();
+    const int expected = delivered_ > 0 ? last_frame_index_ + 1 : (num_frames_ > 0 ? 1 : index);
+    if (index > expected) dropped_ += index - expected;
+  }
   last_frame_index_ = depth.getFrameIndex();
   // Recordings (and the finite virtual device) number frames from 1: index = position in the
   // recording. Live devices: frames delivered so far.

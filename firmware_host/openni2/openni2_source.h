@@ -59,6 +59,9 @@ class Openni2Source : public io::FrameSource {
   bool next(io::Frame& frame) override;
   int64_t size() const override { return num_frames_; }
   bool isLive() const override { return live_; }
+  /// Live devices (the virtual one included): gaps in OpenNI2's depth frame numbers, i.e.
+  /// frames the device delivered while the caller was busy. Recordings play on demand: 0.
+  int64_t droppedFrames() const override { return dropped_; }
   std::string describe() const override { return description_; }
   void close() override;
 
@@ -78,6 +81,7 @@ class Openni2Source : public io::FrameSource {
   std::string uri_;
   int64_t num_frames_ = -1;
   int64_t delivered_ = 0;
+  int64_t dropped_ = 0;
   int64_t max_frames_ = 0;
   int last_frame_index_ = 0;
   bool live_ = true;

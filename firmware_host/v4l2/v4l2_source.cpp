@@ -145,6 +145,12 @@ bool V4l2Source::next(io::Frame& frame) {
       throw;
     }
   }
+  // The driver numbers every captured frame: a gap is frames lost while the caller was busy
+  // (the driver's queue was full) or depth frames the pairer dropped.
+  if (delivered_ > 0 && pair.depth.sequence > last_sequence_ + 1) {
+    dropped_ += pair.depth.sequence - last_sequence_ - 1;
+  }
+  last_sequence_ = pair.depth.sequence;
   frame.index = delivered_++;
   frame.timestamp = pair.depth.timestamp_s;
   char stamp[32];

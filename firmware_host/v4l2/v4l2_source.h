@@ -34,6 +34,8 @@ class V4l2Source : public io::FrameSource {
   /// timeout_s.
   bool next(io::Frame& frame) override;
   bool isLive() const override { return true; }
+  /// Gaps in the driver's depth frame sequence numbers since the first frame.
+  int64_t droppedFrames() const override { return dropped_; }
   std::string describe() const override { return description_; }
   void close() override;
 
@@ -48,6 +50,8 @@ class V4l2Source : public io::FrameSource {
   double depth_unit_m_ = 0.001;
   double timeout_s_ = 2.0;
   int64_t delivered_ = 0;
+  int64_t dropped_ = 0;
+  int64_t last_sequence_ = 0;
   int64_t max_frames_ = 0;
 };
 

@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -112,6 +113,18 @@ emf_status create(const emf_detector_create_info* info, emf_detector** out, char
       setError(error, error_size,
                "maskfile: no dataset folder: the source is not tum:<dir> or cofusion:<dir>; pass "
                "detector.plugin_config \"dir=<dataset folder>\"");
+      return EMF_ERROR_CONFIG;
+    }
+    // A wrong folder would otherwise give a run with no detections and no word about it.
+    std::error_code ec;
+    if (!std::filesystem::is_directory(dir + "/masks", ec)) {
+      setError(
+          error, error_size,
+          "maskfile: '" + dir + "/masks' is not a folder: " +
+              (std::filesystem::is_directory(dir, ec) ? "the dataset holds no stored detections"
+                                                      : "'" + dir + "' does not exist") +
+              "; point detector.plugin_config \"dir=<dataset folder>\" (or the source) at "
+              "a dataset with masks/ (emf synth writes them), or use another detector");
       return EMF_ERROR_CONFIG;
     }
     auto d = std::make_unique<emf_detector>();

@@ -13,12 +13,14 @@
 namespace emf::cli {
 namespace {
 
-double parsePositive(const std::string& text, const char* flag) {
+// A number in [0, 1e6) (`zero_ok`) or (0, 1e6): a zero time delta or association threshold
+// would give empty or all-zero figures instead of an error.
+double parseNumber(const std::string& text, const char* flag, bool zero_ok) {
   char* end = nullptr;
   const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || !(v >= 0) || !(v < 1e6)) {
-    throw InvalidArgument(std::string("--") + flag + " must be a non-negative number, got '" +
-                          text + "'");
+  if (text.empty() || *end != '\0' || !(zero_ok ? v >= 0 : v > 0) || !(v < 1e6)) {
+    throw InvalidArgument(std::string("--") + flag + " must be a " +
+                          (zero_ok ? "non-negative" : "positive") + " number, got '" + text + "'");
   }
   return v;
 }
@@ -50,9 +52,9 @@ int cmdEval(const std::vector<std::string>& args) {
     return kExitUsage;
   }
   io::EvalOptions options;
-  options.max_diff_s = parsePositive(max_diff, "max-diff");
-  options.rpe_delta_s = parsePositive(delta, "delta");
-  options.min_object_coverage = parsePositive(min_coverage, "min-coverage");
+  options.max_diff_s = parseNumber(max_diff, "max-diff", false);
+  options.rpe_delta_s = parseNumber(delta, "delta", false);
+  options.min_object_coverage = parseNumber(min_coverage, "min-coverage", true);
   if (options.min_object_coverage > 1.0) {
     throw InvalidArgument("--min-coverage is a fraction of the timestamps in [0, 1], got '" +
                           min_coverage + "'");

@@ -104,7 +104,7 @@ CoFusionSource::CoFusionSource(const std::string& dir, const SourceOptions& opti
 }
 
 cv::Mat CoFusionSource::readDepth(const std::string& path) const {
-  const cv::Mat raw = cv::imread(path, cv::IMREAD_UNCHANGED);
+  const cv::Mat raw = readImageFile(path, cv::IMREAD_UNCHANGED, "depth EXR", "");
   if (raw.empty()) {
     const char* env = std::getenv("OPENCV_IO_ENABLE_OPENEXR");
     throw IoError("cannot decode depth EXR '" + path + "': the file is corrupt, or OpenCV's " +
@@ -158,7 +158,7 @@ bool CoFusionSource::next(Frame& frame) {
     }
   }
   if (!e.mask.empty()) {
-    const cv::Mat ids = cv::imread(e.mask, cv::IMREAD_UNCHANGED);
+    const cv::Mat ids = readImageFile(e.mask, cv::IMREAD_UNCHANGED, "instance mask", "");
     if (ids.empty()) throw IoError("cannot decode instance mask '" + e.mask + "'");
     if (ids.type() != CV_8UC1 && ids.type() != CV_16UC1) {
       throw IoError("instance mask '" + e.mask + "' is " + describeMatType(ids.type()) +

@@ -1,9 +1,11 @@
 #include "io/depth_image.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <limits>
 #include <opencv2/imgcodecs.hpp>
@@ -87,11 +89,32 @@ std::string describeMatType(int type) {
          "-channel";
 }
 
-cv::Mat readDepthUnits(const std::string& path, const std::string& context) {
-  if (!std::filesystem::exists(path)) {
-    throw IoError(context + ": depth image '" + path + "' does not exist");
+cv::Mat readImageFile(const std::string& path, int flags, const std::string& what,
+                      const std::string& context) {
+  const auto fail = [&](int err) {
+    throw IoError((context.empty() ? "" : context + ": ") + "cannot read " + what + " '" + path +
+                  "': " + (err == ENOENT ? "it does not exist" : std::strerror(err)));
+  };
+  FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) fail(errno);
+  std::vector<uchar> bytes;
+  uchar chunk[65536];
+  size_t n = 0;
+  while ((n = std::fread(chunk, 1, sizeof(chunk), f)) > 0)
+    bytes.insert(bytes.end(), chunk, chunk + n);
+  const int err = std::ferror(f) ? errno : 0;
+  std::fclose(f);
+  if (err != 0) fail(err);
+  if (bytes.empty()) return cv::Mat();
+  try {
+    return cv::imdecode(bytes, flags);
+  } catch (const cv::Exception&) {
+    return cv::Mat();  // the caller says what it expected
   }
-  cv::Mat img = cv::imread(path, cv::IMREAD_UNCHANGED);
+}
+
+cv::Mat readDepthUnits(const std::string& path, const std::string& context) {
+  cv::Mat img = readImageFile(path, cv::IMREAD_UNCHANGED, "depth image", context);
   if (img.empty()) {
     throw IoError(context + ": cannot decode depth image '" + path + "' (corrupt or not a PNG)");
   }
@@ -103,10 +126,7 @@ cv::Mat readDepthUnits(const std::string& path, const std::string& context) {
 }
 
 cv::Mat readColor(const std::string& path, const std::string& context) {
-  if (!std::filesystem::exists(path)) {
-    throw IoError(context + ": colour image '" + path + "' does not exist");
-  }
-  cv::Mat img = cv::imread(path, cv::IMREAD_COLOR);
+  cv::Mat img = readImageFile(path, cv::IMREAD_COLOR, "colour image", context);
   if (img.empty()) {
     throw IoError(context + ": cannot decode colour image '" + path + "' (corrupt file?)");
   }

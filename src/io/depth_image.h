@@ -25,6 +25,13 @@ cv::Mat depthToUnits(const cv::Mat& depth_m, double units_per_metre);
 /// The text names the depth found and the URI key to set (`?depth_scale=`).
 std::string depthScaleWarning(const cv::Mat& depth_units, double units_per_metre);
 
+/// Reads an image file and decodes it with OpenCV (`flags` as cv::imread's). A file that cannot
+/// be read is named with the system's reason (does not exist, permission denied, a folder);
+/// one that cannot be decoded returns an empty cv::Mat, for the caller's message. Throws
+/// IoError "<context>: cannot read <what> '<path>': <reason>" (context may be empty).
+cv::Mat readImageFile(const std::string& path, int flags, const std::string& what,
+                      const std::string& context);
+
 /// Reads a 16-bit single-channel depth PNG. Throws IoError starting with `context` (e.g.
 /// "depth.txt:12") and naming `path` when the file is missing/undecodable or not 16-bit
 /// single-channel.

@@ -48,8 +48,9 @@ std::vector<Detection> readDetectionFiles(const std::string& png_path, const std
     throw IoError("detection mask '" + png_path + "' does not exist but '" + txt_path +
                   "' does; write both files for a labelled frame");
   }
-  const cv::Mat ids = cv::imread(png_path, cv::IMREAD_UNCHANGED);
-  if (ids.empty()) throw IoError("cannot decode detection mask '" + png_path + "'");
+  const cv::Mat ids = readImageFile(png_path, cv::IMREAD_UNCHANGED, "detection mask", "");
+  if (ids.empty())
+    throw IoError("cannot decode detection mask '" + png_path + "' (corrupt or not a PNG)");
   if (ids.type() != CV_16UC1) {
     throw IoError("detection mask '" + png_path + "' is " + describeMatType(ids.type()) +
                   "; expected a 16-bit single-channel PNG (pixel = detection id, 0 = none)");

@@ -21,6 +21,10 @@ Intrinsics checkedIntrinsics(const Intrinsics& k) {
       k.fy < k.height / 20.0) {
     fail("focal lengths must be finite and at least 1/20 of the image side");
   }
+  if (k.fx > kMaxFocalPerSide * k.width || k.fy > kMaxFocalPerSide * k.height) {
+    fail("focal lengths must be at most " + std::to_string(static_cast<int>(kMaxFocalPerSide)) +
+         " image sides (a field of view under 0.6 deg is not a depth camera)");
+  }
   if (!std::isfinite(k.cx) || !std::isfinite(k.cy) || k.cx < -k.width || k.cx > 2.0 * k.width ||
       k.cy < -k.height || k.cy > 2.0 * k.height) {
     fail("the principal point must lie at most one image side outside the image");

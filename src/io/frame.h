@@ -38,11 +38,14 @@ struct Intrinsics {
 
 /// Largest image side the SLAM accepts (pixels).
 constexpr int kMaxImageSide = 16384;
+/// Longest focal length checkedIntrinsics accepts, in image sides (fx / width).
+constexpr double kMaxFocalPerSide = 100.0;
 
 /// `k` if it describes a real pinhole depth camera, else throws InvalidArgument naming the bad
-/// value and what to do: focal lengths finite and at least a twentieth of the image side (a
-/// field of view under ~170 deg), principal point finite and at most one image side outside the
-/// image, size in [1, kMaxImageSide]. Far-off values would make the map's ray walks unbounded.
+/// value and what to do: focal lengths finite, at least a twentieth of the image side (a
+/// field of view under ~170 deg) and at most kMaxFocalPerSide sides (over 0.6 deg), principal point
+/// finite and at most one image side outside the image, size in [1, kMaxImageSide]. Far-off values
+/// would make the map's ray walks unbounded.
 Intrinsics checkedIntrinsics(const Intrinsics& k);
 
 /// One instance from a detector (or from a dataset's masks/ folder).

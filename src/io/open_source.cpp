@@ -32,9 +32,30 @@ void requirePath(const Uri& uri, const char* what) {
   }
 }
 
+std::unique_ptr<FrameSource> openAnySource(const std::string& uri_text,
+                                           const SourceOptions& options);
+
 }  // namespace
 
 std::unique_ptr<FrameSource> openSource(const std::string& uri_text, const SourceOptions& options) {
+  std::unique_ptr<FrameSource> source = openAnySource(uri_text, options);
+  // Before the first frame is processed: a huge image would take seconds and gigabytes to fail.
+  const Intrinsics k = source->intrinsics();
+  const int64_t pixels = static_cast<int64_t>(k.width) * k.height;
+  if (pixels > options.max_pixels) {
+    throw IoError("source '" + uri_text + "': depth images of " + std::to_string(k.width) + "x" +
+                  std::to_string(k.height) + " = " + std::to_string(pixels) +
+                  " pixels are more than source.max_pixels (" + std::to_string(options.max_pixels) +
+                  "); downscale the images, or raise source.max_pixels (memory and time per "
+                  "frame grow with it)");
+  }
+  return source;
+}
+
+namespace {
+
+std::unique_ptr<FrameSource> openAnySource(const std::string& uri_text,
+                                           const SourceOptions& options) {
   const Uri uri = parseUri(uri_text);
   const std::vector<std::string> base = sourceQueryKeys();
 
@@ -70,5 +91,7 @@ std::unique_ptr<FrameSource> openSource(const std::string& uri_text, const Sourc
                 ":'; use tum:<dir>, cofusion:<dir>, klg:<file>, synth:<preset>, openni2:[uri] "
                 "or v4l2:/dev/videoN");
 }
+
+}  // namespace
 
 }  // namespace emf::io

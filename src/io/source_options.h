@@ -18,6 +18,8 @@ struct SourceOptions {
   double max_time_diff_s = 0.02;
   /// Stop after this many frames (0 = all).
   int max_frames = 0;
+  /// Largest depth image accepted (width x height), checked when the source opens: 2048 x 2048.
+  int max_pixels = 4194304;
 
   void bind(OptionBinder& b) {
     b.text("uri", uri, "default source URI (tum:, cofusion:, klg:, synth:, openni2:, v4l2:)");
@@ -30,6 +32,8 @@ struct SourceOptions {
     b.real("max_time_diff_s", max_time_diff_s, 1e-6, 1.0, "s",
            "max rgb/depth timestamp difference when associating");
     b.integer("max_frames", max_frames, 0, 100000000, "frames", "stop after N frames (0 = all)");
+    b.integer("max_pixels", max_pixels, 1, 268435456, "pixels",
+              "largest depth image accepted (width x height)");
   }
 };
 

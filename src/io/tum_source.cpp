@@ -175,7 +175,8 @@ TumSource::TumSource(const std::string& dir, const SourceOptions& options)
     if (rgb_list.empty()) {
       logWarning("TUM folder '", dir, "': no rgb.txt entries, frames have depth only");
       for (const auto& d : depth_list) {
-        entries_.push_back({d.stamp, d.stamp_text, d.file, 0, "", fileLine(depth_path, d.line)});
+        entries_.push_back(
+            {d.stamp, d.stamp_text, d.file, 0, "", fileLine(depth_path, d.line), ""});
       }
     } else {
       std::vector<double> ts_depth, ts_rgb;
@@ -185,8 +186,8 @@ TumSource::TumSource(const std::string& dir, const SourceOptions& options)
       for (const auto& m : matches) {
         const ListEntry& d = depth_list[m.first];
         const ListEntry& r = rgb_list[m.second];
-        entries_.push_back(
-            {d.stamp, d.stamp_text, d.file, r.stamp, r.file, fileLine(depth_path, d.line)});
+        entries_.push_back({d.stamp, d.stamp_text, d.file, r.stamp, r.file,
+                            fileLine(depth_path, d.line), fileLine(rgb_path, r.line)});
       }
       if (matches.size() < depth_list.size()) {
         logWarning("TUM folder '", dir, "': ", depth_list.size() - matches.size(), " of ",
@@ -275,12 +276,13 @@ Frame TumSource::readFrame(size_t index) const {
   f.depth = depthFromUnits(units, options_.depth_scale);
   if (!e.rgb_file.empty()) {
     const std::string color_file = (root / e.rgb_file).string();
-    f.color = readColor(color_file, e.origin);
+    const std::string& color_origin = e.color_origin.empty() ? e.origin : e.color_origin;
+    f.color = readColor(color_file, color_origin);
     if (color_size_.area() == 0) {
       color_size_ = f.color.size();
       first_color_file_ = color_file;
     } else if (f.color.size() != color_size_) {
-      throw IoError(e.origin + ": colour image '" + color_file + "' is " +
+      throw IoError(color_origin + ": colour image '" + color_file + "' is " +
                     sizeText(f.color.size()) + " but '" + first_color_file_ + "' is " +
                     sizeText(color_size_) + "; all frames must have the same size");
     }
@@ -291,7 +293,17 @@ Frame TumSource::readFrame(size_t index) const {
     }
   }
   if (!masks_dir_.empty()) {
-    f.detections = readFrameDetections(masks_dir_, e.depth_stamp_text, depth_size_);
+    // The source's copy is only informative (the maskfile plugin reads masks/ itself and
+    // reports its own failures): a broken mask must not stop a run that uses no detector.
+    try {
+      f.detections = readFrameDetections(masks_dir_, e.depth_stamp_text, depth_size_);
+    } catch (const IoError& err) {
+      if (bad_masks_++ == 0) {
+        logWarning(err.what(), "; frame ", index,
+                   " is read without its detections (a run with --detector maskfile reports "
+                   "the same file as a detector failure)");
+      }
+    }
   }
   return f;
 }

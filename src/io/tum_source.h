@@ -25,8 +25,9 @@ struct TumEntry {
   std::string depth_stamp_text;  // exactly as written in depth.txt (detections key on it)
   std::string depth_file;        // relative to the folder
   double rgb_stamp = 0;
-  std::string rgb_file;  // empty: no colour for this frame
-  std::string origin;    // "<list file>:<line>" the entry came from (for errors)
+  std::string rgb_file;      // empty: no colour for this frame
+  std::string origin;        // "<list file>:<line>" the entry came from (for errors)
+  std::string color_origin;  // the same for the colour image ("" = origin: associations.txt)
 };
 
 class TumSource : public FrameSource {
@@ -67,6 +68,7 @@ class TumSource : public FrameSource {
   std::vector<std::string> open_warnings_;
   mutable cv::Size color_size_;  // first colour image's size (0x0 until read)
   mutable std::string first_color_file_;
+  mutable int64_t bad_masks_ = 0;  // frames whose masks/ files could not be read
 };
 
 /// The tum-fr1-xyz-pairs layout: a case folder with img_prev.png, img_curr.png, dep_prev.png,

@@ -33,8 +33,8 @@ constexpr double kWaitS = 120.0;
 
 // A tiny endless run: 80x60 synthetic room, small pool.
 std::string tinyRun(const std::string& out_dir, int frames = 100000) {
-  return std::string(EMF_CLI_PATH) + " run --quiet --source 'synth:room?frames=" +
-         std::to_string(frames) +
+  return std::string(EMF_CLI_PATH) +
+         " run --quiet --source 'synth:room?frames=" + std::to_string(frames) +
          "&width=80&height=60' --set map.memory_mb=32 --set map.background_voxel_m=0.04"
          " --set map.background_resolution=128 --out " +
          out_dir;

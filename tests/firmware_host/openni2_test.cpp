@@ -482,5 +482,33 @@ TEST(Openni2Virtual, RepeatedSensorTimestampsAreCountedNotSilentlyDropped) {
   EXPECT_NE(json.find("\"lost_frames\": 0"), std::string::npos) << json;
 }
 
+TEST(Openni2Cli, FramesTheDeviceServedWhileTheSlamWasBusyAreReportedAsDropped) {
+  // The virtual device at 1000x real time serves its 20 frames far faster than the SLAM reads
+  // them: OpenNI2 keeps the newest, so the frame numbers emf sees have gaps. Every frame is
+  // either processed or counted as dropped (before, "5 frames (0 lost)" and nothing else).
+  const std::string dir = test::tempDir("virtual-drops");
+  const std::string cli = EMF_CLI_PATH;
+  std::string out;
+  ASSERT_EQ(test::runCommand(cli + " synth room --out " + dir +
+                                 "/seq --frames 20 --width 160 --height 120 --det-every 0",
+                             &out),
+            0)
+      << out;
+  ASSERT_EQ(test::runCommand(cli + " run --quiet --source 'openni2:emf-virtual://" + dir +
+                                 "/seq;speed=1000' --out " + dir + "/run",
+                             &out),
+            0)
+      << out;
+  const std::string json = test::readText(dir + "/run/run.json");
+  const auto number = [&](const std::string& key) {
+    const size_t at = json.find("\"" + key + "\": ");
+    return at == std::string::npos ? -1 : std::stoll(json.substr(at + key.size() + 4));
+  };
+  const long long frames = number("frames"), dropped = number("dropped_frames");
+  EXPECT_GT(dropped, 0) << json;
+  EXPECT_EQ(frames + dropped, 20) << json;
+  EXPECT_NE(out.find(std::to_string(dropped) + " dropped by the source"), std::string::npos) << out;
+}
+
 }  // namespace
 }  // namespace emf::fw

@@ -479,7 +479,7 @@ TEST(EvalCli, UsageAndErrors) {
   EXPECT_EQ(test::runCommand(cli() + " eval --gt " + refGt() + " --est " + refEst() + " --delta x",
                              &text),
             1);
-  EXPECT_NE(text.find("--delta must be a non-negative number"), std::string::npos) << text;
+  EXPECT_NE(text.find("--delta must be a positive number"), std::string::npos) << text;
   EXPECT_EQ(
       test::runCommand(cli() + " eval --gt " + refGt() + " --est " + refEst() + " --min-coverage 2",
                        &text),
