@@ -1,6 +1,7 @@
 // The runtime C API: emf_runtime wraps a runtime::Runtime around an emf_system whose
 // SlamSystem is fed by the runtime's SLAM thread.
 #include <condition_variable>
+#include <cstddef>
 #include <cstring>
 #include <memory>
 #include <mutex>
@@ -234,8 +235,8 @@ EMF_API emf_status emf_runtime_get_stats(const emf_runtime* runtime, emf_stats* 
   return guard("emf_runtime_get_stats", [&]() -> emf_status {
     const char* fn = "emf_runtime_get_stats";
     if (!runtime) return fail(EMF_ERROR_INVALID_ARGUMENT, std::string(fn) + ": runtime is NULL");
-    const emf_status s = emf::capi::checkStruct(stats, stats ? stats->struct_size : 0,
-                                                sizeof(emf_stats), "emf_stats", fn);
+    const emf_status s = emf::capi::checkStruct(
+        stats, stats ? stats->struct_size : 0, offsetof(emf_stats, detector_runs), "emf_stats", fn);
     if (s != EMF_OK) return s;
     const CallScope scope(*runtime);
     const emf::runtime::RuntimeCounters c = runtime->runtime->counters();

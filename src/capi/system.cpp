@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstdio>
 #include <cstring>
 #include <limits>
@@ -468,8 +469,8 @@ EMF_API emf_status emf_system_get_stats(const emf_system* system, emf_stats* sta
   return guard("emf_system_get_stats", [&]() -> emf_status {
     const char* fn = "emf_system_get_stats";
     if (!system) return fail(EMF_ERROR_INVALID_ARGUMENT, std::string(fn) + ": system is NULL");
-    const emf_status s = emf::capi::checkStruct(stats, stats ? stats->struct_size : 0,
-                                                sizeof(emf_stats), "emf_stats", fn);
+    const emf_status s = emf::capi::checkStruct(
+        stats, stats ? stats->struct_size : 0, offsetof(emf_stats, detector_runs), "emf_stats", fn);
     if (s != EMF_OK) return s;
     emf::capi::requireIdle(*system, fn);
     emf_stats out;
@@ -483,6 +484,12 @@ EMF_API emf_status emf_system_get_stats(const emf_system* system, emf_stats* sta
       out.pool_blocks_used = p.used_slots;
       out.pool_blocks_dropped = p.dropped_blocks;
       out.pool_bytes = static_cast<int64_t>(p.pool_bytes);
+      const emf::pipeline::DetectorStats d = system->slam->detectorStats();
+      out.detector_runs = d.runs;
+      out.detector_failures = d.failures;
+      out.detector_crashes = d.crashes;
+      out.detector_timeouts = d.timeouts;
+      out.detector_restarts = d.restarts;
     }
     emf::capi::copyOut(out, stats);
     return EMF_OK;

@@ -4,12 +4,14 @@
 #include <cctype>
 #include <chrono>
 #include <exception>
+#include <filesystem>
 
 #include "common/error.h"
 #include "common/log.h"
 #include "pipeline/plugin_search_path.h"
 
 namespace emf::pipeline {
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -17,6 +19,8 @@ namespace {
 constexpr size_t kReservedObjects = 64;
 // Timestamp text capacity reserved in the slot (source timestamps are ~20 characters).
 constexpr size_t kReservedStampChars = 64;
+// An isolated plugin's create() may load a model: it gets this long before it counts as hung.
+constexpr double kLoadTimeoutS = 120.0;
 
 // Copies `src` into `dst`, reusing dst's buffer when size and type match.
 void copyInto(const cv::Mat& src, cv::Mat* dst) {
@@ -28,6 +32,21 @@ void copyInto(const cv::Mat& src, cv::Mat* dst) {
 }
 
 }  // namespace
+
+bool usesProcess(const DetectorOptions& options, const std::string& resolved_path) {
+  if (options.isolation == "process") return true;
+  if (options.isolation == "none") return false;
+  if (options.isolation != "auto") {
+    throw ConfigError("detector.isolation: '" + options.isolation +
+                      "' is not one of auto, process, none (set detector.isolation)");
+  }
+  std::error_code ec;
+  const fs::path plugin = fs::weakly_canonical(resolved_path, ec);
+  for (const std::string& folder : modulePluginFolders()) {
+    if (fs::weakly_canonical(folder, ec) == plugin.parent_path()) return false;
+  }
+  return true;
+}
 
 std::string problemKind(const std::string& message) {
   std::string out;
@@ -47,7 +66,18 @@ std::string problemKind(const std::string& message) {
 
 DetectorScheduler::DetectorScheduler(const DetectorOptions& options, const std::string& source_uri,
                                      const io::Intrinsics& intrinsics) {
-  if (!options.plugin.empty()) {
+  if (!options.plugin.empty() &&
+      usesProcess(options, resolvePluginPath(options.plugin, pluginSearchPath(options)))) {
+    isolated_ = std::make_unique<IsolatedDetector>(
+        detectorHostPath(), resolvePluginPath(options.plugin, pluginSearchPath(options)),
+        options.plugin_config, source_uri, intrinsics, options.deadline_s, kLoadTimeoutS);
+    IsolatedDetector* isolated = isolated_.get();
+    detect_ = [isolated](const io::Frame& f, const cv::Mat* q0, const cv::Mat* residual) {
+      return isolated->detect(f, q0, residual);
+    };
+    name_ = isolated_->name();
+    stats_.isolation = "process";
+  } else if (!options.plugin.empty()) {
     plugin_ = DetectorPlugin::load(options.plugin, pluginSearchPath(options), options.plugin_config,
                                    source_uri, intrinsics);
     plugin_->setLogProblems(false);  // logged once per kind by recordProblem()
@@ -143,6 +173,12 @@ void DetectorScheduler::runDetector(const Slot& slot, DetectionBatch* batch) {
   batch->new_objects_only = out.new_objects_only;
   std::lock_guard<std::mutex> lock(mutex_);
   ++stats_.runs;
+  if (isolated_) {
+    const IsolationCounters c = isolated_->counters();
+    stats_.crashes = c.crashes;
+    stats_.timeouts = c.timeouts;
+    stats_.restarts = c.restarts;
+  }
   detector_ms_.push_back(ms);
   stats_.detections += static_cast<int64_t>(batch->detections.size());
   stats_.rejected += static_cast<int64_t>(out.rejected.size());

@@ -20,6 +20,7 @@
 
 #include "io/frame.h"
 #include "pipeline/detector_plugin.h"
+#include "pipeline/isolated_detector.h"
 #include "pipeline/pipeline_options.h"
 
 namespace emf::pipeline {
@@ -61,6 +62,11 @@ struct DetectorStats {
   int64_t results_delivered = 0;  // batches returned by submit()/finish()
   double detector_ms_median = 0;  // of the detect() calls (0 when none ran)
   double detector_ms_max = 0;
+  /// "in-process" or "process" (detector.isolation); the counters of an isolated plugin.
+  std::string isolation = "in-process";
+  int64_t crashes = 0;   // the plugin's process died during a call
+  int64_t timeouts = 0;  // a call passed detector.deadline_s: the process was killed
+  int64_t restarts = 0;  // the plugin's process was started again
   /// Every distinct kind of problem (message with its numbers replaced by '#') and its count.
   std::map<std::string, int64_t> problems;
 };
@@ -80,8 +86,9 @@ class DetectorScheduler {
 
   /// Loads options.plugin (a name looked up on pluginSearchPath(options) — detector.search_path,
   /// $EMF_PLUGIN_PATH, the build and install plugin folders — or a path), passing it
-  /// options.plugin_config, `source_uri` and `intrinsics`. No plugin when options.plugin is
-  /// empty (enabled() is false). Throws PluginError (not found: lists the folders searched;
+  /// options.plugin_config, `source_uri` and `intrinsics`, in emf or in a child process per
+  /// options.isolation (usesProcess). No plugin when options.plugin is empty (enabled() is
+  /// false). Throws PluginError (not found: lists the folders searched;
   /// cannot load/create: says why) and ConfigError for a bad mode / interval.
   DetectorScheduler(const DetectorOptions& options, const std::string& source_uri,
                     const io::Intrinsics& intrinsics);
@@ -96,7 +103,9 @@ class DetectorScheduler {
   bool enabled() const { return static_cast<bool>(detect_); }
   /// Whether the detector reads the feedback images of submit() (a plugin's
   /// EMF_DETECTOR_FLAG_READS_FEEDBACK; always true for a DetectFunction).
-  bool readsFeedback() const { return plugin_ ? plugin_->readsFeedback() : true; }
+  bool readsFeedback() const {
+    return plugin_ ? plugin_->readsFeedback() : isolated_ ? isolated_->readsFeedback() : true;
+  }
   bool async() const { return async_; }
 
   /// Call once per frame after tracking, with the frame's camera pose and the object poses
@@ -143,7 +152,8 @@ class DetectorScheduler {
   void threadMain();
   std::optional<DetectionBatch> takeReady(int64_t current_index);  // mutex_ held
 
-  std::unique_ptr<DetectorPlugin> plugin_;
+  std::unique_ptr<DetectorPlugin> plugin_;      // detector.isolation none
+  std::unique_ptr<IsolatedDetector> isolated_;  // detector.isolation process
   DetectFunction detect_;
   std::string name_;
   bool async_ = false;
@@ -166,6 +176,11 @@ class DetectorScheduler {
   DetectorStats stats_;
   std::vector<double> detector_ms_;
 };
+
+/// Whether detector.isolation puts the plugin at `resolved_path` in a child process: process
+/// always, none never, auto when the plugin is not one installed with emf (not in
+/// modulePluginFolders()).
+bool usesProcess(const DetectorOptions& options, const std::string& resolved_path);
 
 /// `message` with every run of digits replaced by '#' (the kind of a problem for counting and
 /// logging once: "frame 12 detection 3: ..." and "frame 40 detection 1: ..." are one kind).

@@ -20,6 +20,13 @@ struct DetectorOptions {
   int every_n_frames = 30;
   /// sequential (deterministic, datasets) or async (own thread, live sensors).
   std::string mode = "sequential";
+  /// Where the plugin runs: process (a child process, emf_detector_host: a crash or hang of the
+  /// plugin cannot take the SLAM down), none (inside emf), auto (process for a plugin loaded by
+  /// path, none for the plugins installed with emf).
+  std::string isolation = "auto";
+  /// Under process isolation: a detect() call that takes longer is a hang; the child is killed
+  /// and restarted (the SLAM waits this long at most in sequential mode).
+  double deadline_s = 5.0;
 
   void bind(OptionBinder& b) {
     b.text("plugin", plugin, "detector plugin name or path ('' = none)");
@@ -27,6 +34,11 @@ struct DetectorOptions {
     b.textList("search_path", search_path, "extra plugin folders");
     b.integer("every_n_frames", every_n_frames, 1, 100000, "frames", "detection interval");
     b.choice("mode", mode, {"sequential", "async"}, "how the detector runs");
+    b.choice("isolation", isolation, {"auto", "process", "none"},
+             "plugin in a child process (process), in emf (none), or process for plugins "
+             "loaded by path (auto)");
+    b.real("deadline_s", deadline_s, 0.01, 3600.0, "s",
+           "isolated plugin: a call taking longer is a hang (child killed, restarted)");
   }
 };
 

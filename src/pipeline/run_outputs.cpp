@@ -66,6 +66,10 @@ nlohmann::json detectorStatsJson(const DetectorStats& s) {
           {"results_delivered", s.results_delivered},
           {"detector_ms_median", s.detector_ms_median},
           {"detector_ms_max", s.detector_ms_max},
+          {"isolation", s.isolation},
+          {"crashes", s.crashes},
+          {"timeouts", s.timeouts},
+          {"restarts", s.restarts},
           {"problems", problems}};
 }
 

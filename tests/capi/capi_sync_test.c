@@ -5,6 +5,7 @@
  * Prints "capi_sync_test: N checks passed" or FAILED lines. */
 #include <emf/emf.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -251,6 +252,13 @@ int main(int argc, char** argv) {
   stats.struct_size = sizeof(stats);
   CHECK(emf_system_get_stats(sys, &stats) == EMF_OK);
   CHECK(stats.frames_processed == 0);
+  CHECK(stats.detector_runs == 0 && stats.detector_crashes == 0); /* no detector configured */
+  /* A caller built before the detector fields were appended: accepted, and nothing written past
+   * its struct_size. */
+  stats.detector_runs = -7;
+  stats.struct_size = offsetof(emf_stats, detector_runs);
+  CHECK(emf_system_get_stats(sys, &stats) == EMF_OK);
+  CHECK(stats.detector_runs == -7 && stats.struct_size == offsetof(emf_stats, detector_runs));
   free(depth16);
   depth16 = NULL;
 

@@ -10,13 +10,19 @@
  *     field existed: the host must not read it.
  *  8 "newer": built against a future header with two fields appended to emf_detection: the
  *     host must step through the array by the plugin's struct_size. Two good detections, and a
- *     third whose struct_size differs from the first's. */
+ *     third whose struct_size differs from the first's.
+ *  9 "faulty": one good detection per frame, except on the frames its config names:
+ *     "segfault=N,abort=M,hang=K,garbage=G" (any subset; -1 = never) — a null write, abort(),
+ *     sleeping forever, and a result whose detections pointer is garbage (the host's reading of
+ *     it crashes). For process isolation (detector.isolation: process). */
 #include <emf/emf_detector.h>
 #include <math.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <stdint.h>
+#include <unistd.h>
 
 #if TEST_PLUGIN_KIND == 4
 EMF_DETECTOR_EXPORT int not_the_entry(void);
@@ -32,6 +38,7 @@ typedef struct newer_detection {
 
 struct emf_detector {
   int width, height;
+  long segfault_at, abort_at, hang_at, garbage_at; /* "faulty": frame indices, -1 = never */
   uint8_t* full_mask;
   uint8_t* small_mask;
   float* bad_probability;
@@ -48,6 +55,24 @@ static emf_status create(const emf_detector_create_info* info, emf_detector** ou
     return EMF_ERROR_CONFIG;
   }
   d = (emf_detector*)calloc(1, sizeof(emf_detector));
+  d->segfault_at = d->abort_at = d->hang_at = d->garbage_at = -1;
+  if (TEST_PLUGIN_KIND == 9 && info->config) {
+    const char* p = info->config;
+    while (*p) {
+      long* field = NULL;
+      if (strncmp(p, "segfault=", 9) == 0) field = &d->segfault_at, p += 9;
+      else if (strncmp(p, "abort=", 6) == 0) field = &d->abort_at, p += 6;
+      else if (strncmp(p, "hang=", 5) == 0) field = &d->hang_at, p += 5;
+      else if (strncmp(p, "garbage=", 8) == 0) field = &d->garbage_at, p += 8;
+      if (!field) {
+        snprintf(error, error_size, "test plugin: unknown config '%s'", p);
+        free(d);
+        return EMF_ERROR_CONFIG;
+      }
+      *field = strtol(p, (char**)&p, 10);
+      if (*p == ',') ++p;
+    }
+  }
   d->width = info->intrinsics.width;
   d->height = info->intrinsics.height;
   *out = d;
@@ -99,6 +124,23 @@ static emf_status detect(emf_detector* d, const emf_detector_frame* f, emf_detec
   d->result.struct_size = sizeof(d->result);
   d->result.count = 6;
   d->result.detections = d->dets;
+  if (TEST_PLUGIN_KIND == 9) {
+    if (f->frame_index == d->segfault_at) {
+      int* volatile nowhere = NULL; /* volatile: the compiler cannot see it is null */
+      *nowhere = 1;
+    }
+    if (f->frame_index == d->abort_at) abort();
+    if (f->frame_index == d->hang_at) {
+      for (;;) sleep(1);
+    }
+    d->result.count = 1;
+    if (f->frame_index == d->garbage_at) {
+      d->result.count = 3;
+      d->result.detections = (emf_detection*)(uintptr_t)0x10;
+      *out = &d->result;
+      return EMF_OK;
+    }
+  }
   if (TEST_PLUGIN_KIND == 8) {
     for (x = 0; x < 3; ++x) {
       d->newer[x].base = makeDetection(x == 0 ? "cup" : "car", x == 0 ? 0.9f : 0.7f, 20 + 10 * x,
