@@ -149,13 +149,15 @@ typedef struct emf_stats {
   int64_t frames_dropped;      /**< runtime only: frames the ring dropped (drop_oldest) */
   int64_t results_dropped;     /**< runtime only: results discarded from the full poll queue */
   int64_t sensor_errors;       /**< runtime only: sensor disconnections reported */
-  /* Appended in 0.x: callers with an older emf.h pass a smaller struct_size and get the fields
-   * above. emf_system_get_stats only (0 from the runtime). */
-  int64_t detector_runs;     /**< detector plugin calls finished */
-  int64_t detector_failures; /**< calls that gave no detections (plugin error, crash, hang) */
-  int64_t detector_crashes;  /**< detector.isolation process: the plugin's process died */
-  int64_t detector_timeouts; /**< ... a call passed detector.deadline_s (process killed) */
-  int64_t detector_restarts; /**< ... the plugin's process was started again */
+  /* Appended later: callers with an older emf.h pass a smaller struct_size and get the fields
+   * above. The detector_* fields from emf_system_get_stats only (0 from the runtime). */
+  int64_t detector_runs;         /**< detector plugin calls finished */
+  int64_t detector_failures;     /**< calls that gave no detections (plugin error, crash, hang) */
+  int64_t detector_crashes;      /**< detector.isolation process: the plugin's process died */
+  int64_t detector_timeouts;     /**< ... a call passed detector.deadline_s (process killed) */
+  int64_t detector_restarts;     /**< ... the plugin's process was started again */
+  int64_t source_frames_dropped; /**< runtime only: frames a live sensor delivered while the
+                                      capture thread was busy (gaps in its frame numbers) */
 } emf_stats;
 
 /** Sets the depth camera intrinsics; required once before the first emf_system_process_frame

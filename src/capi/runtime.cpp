@@ -253,6 +253,7 @@ EMF_API emf_status emf_runtime_get_stats(const emf_runtime* runtime, emf_stats* 
     out.frames_dropped = c.dropped;
     out.results_dropped = c.results_dropped;
     out.sensor_errors = c.sensor_errors;
+    out.source_frames_dropped = c.source_dropped;
     emf::capi::copyOut(out, stats);
     return EMF_OK;
   });

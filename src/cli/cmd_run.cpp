@@ -134,7 +134,7 @@ int cmdRun(const std::vector<std::string>& args) {
     camera.sync();
     objects.sync();
     const int mesh_every = config.output.mesh_checkpoint_frames;
-    if (mesh_every > 0 && frames_done % mesh_every == 0) {
+    if (mesh_every > 0 && frames_done > 0 && frames_done % mesh_every == 0) {
       pipeline::writeBackgroundMesh(out_dir, slam, config.output.binary_ply);
       objects.writeLiveMeshes(volume_of);
     }
@@ -182,7 +182,10 @@ int cmdRun(const std::vector<std::string>& args) {
         objects.writeFrameImages(o, frame.color, ids, maps);
       }
       ++n;
-      if (n % config.output.checkpoint_frames == 0) checkpoint(n);
+      const int mesh_every = config.output.mesh_checkpoint_frames;
+      if (n % config.output.checkpoint_frames == 0 || (mesh_every > 0 && n % mesh_every == 0)) {
+        checkpoint(n);
+      }
       if (!quiet) {
         std::string status;
         if (!info.lost.empty()) status = "lost " + std::to_string(info.lost.size());

@@ -229,6 +229,7 @@ void Runtime::captureLoop() {
         std::lock_guard<std::mutex> lock(mutex_);
         if (sensor_down_) logInfo("runtime: sensor ", source_description_, " is back");
         sensor_down_ = false;
+        counters_.source_dropped = source_->droppedFrames();
       }
       if (!pushFrame(frame)) break;
     }

@@ -94,6 +94,7 @@ struct RuntimeCounters {
   int64_t lost = 0;             // processed frames whose camera tracking failed
   int64_t results_dropped = 0;  // results discarded from the full poll queue (never polled)
   int64_t sensor_errors = 0;    // SensorDisconnected reports of the source
+  int64_t source_dropped = 0;   // frames the source dropped before the capture thread read them
   PoolCounters pool;            // after the last processed frame
 };
 

@@ -132,6 +132,22 @@ TEST(Faults, SigkillAtRandomFramesKeepsEveryPoseWrittenBefore) {
   EXPECT_EQ(readJson(root + "/0/run.json")["status"], "finished");
 }
 
+TEST(Faults, MeshCheckpointsLeaveAMeshToAKilledRun) {
+  // output.mesh_checkpoint_frames: 5: background.ply is rewritten (atomically) every 5 frames,
+  // so a run killed later still has a mesh; without it the mesh is written at the end only.
+  const std::string dir = test::tempDir("faults-mesh") + "/out";
+  Child emf(tinyRun(dir) + " --set output.mesh_checkpoint_frames=5", dir + ".log");
+  ASSERT_TRUE(waitFor([&] { return poseLines(dir + "/camera.txt") >= 12; }));
+  emf.signal(SIGKILL);
+  ASSERT_EQ(emf.wait(), 128 + SIGKILL);
+  const std::string ply = test::readText(dir + "/background.ply");
+  ASSERT_EQ(ply.rfind("ply\n", 0), 0u) << ply.substr(0, 64);
+  const size_t at = ply.find("element vertex ");
+  ASSERT_NE(at, std::string::npos);
+  EXPECT_GT(std::stol(ply.substr(at + 15)), 100);
+  expectNoTemporaries(dir);
+}
+
 TEST(Faults, AnyNumberOfCtrlCGivesTheSameFolder) {
   const std::string root = test::tempDir("faults-sigint");
   for (const int signals : {1, 5}) {
