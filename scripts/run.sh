@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
 # The main job (README): installs what is missing, builds, then on the built-in default input
-#   1. renders the synthetic static room (conf: source.uri) into out/default/input (TUM folder
-#      with exact ground truth),
-#   2. runs the SLAM on it -> out/default/{camera.txt,background.ply,run.json},
-#   3. evaluates the camera trajectory against the ground truth -> out/default/eval.{json,png}.
+#   1. renders the synthetic `cars` scene (two toy cars driving in a room, simulated detections
+#      every 30 frames) into out/default/input (TUM folder with exact ground truth),
+#   2. runs the SLAM on it with the maskfile detector replaying those detections ->
+#      out/default/{camera.txt,object-<id>.txt,background.ply,object-<id>.ply,run.json} and
+#      out/default/images/<frame>-objects.png (each object's mask over the colour image),
+#   3. evaluates the camera and object trajectories against the ground truth ->
+#      out/default/eval.{json,png}.
 # EMF_RUN_FRAMES (default 300) sets the sequence length; extra arguments go to `emf run`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -13,7 +16,9 @@ frames="${EMF_RUN_FRAMES:-300}"
 out=out/default
 mkdir -p "$out"
 ./build/bin/emf info --no-kernels | tee "$out/info.txt"
-./build/bin/emf synth room --frames "$frames" --out "$out/input" --force
-./build/bin/emf run --source "tum:$out/input" --out "$out" --force "$@"
+./build/bin/emf synth cars --frames "$frames" --out "$out/input" --force
+./build/bin/emf run --source "tum:$out/input" --detector maskfile --out "$out" --force \
+  --set output.write_images=true "$@"
 ./build/bin/emf eval --gt "$out/input" --est "$out" --out "$out"
-echo "emf: outputs in $(pwd)/$out (camera.txt, background.ply, run.json, eval.json, eval.png)"
+echo "emf: outputs in $(pwd)/$out (camera.txt, object-<id>.txt, background.ply, run.json," \
+  "eval.json, eval.png; images/<frame>-objects.png: the objects' masks over the colour image)"
