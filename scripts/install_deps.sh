@@ -10,6 +10,7 @@ PACKAGES=(
   libeigen3-dev libopencv-dev libyaml-cpp-dev libgtest-dev libgmock-dev
   libusb-1.0-0-dev libopenni2-dev libv4l-dev zlib1g-dev libpng-dev libjpeg-dev nlohmann-json3-dev
   python3 python3-numpy python3-onnx python3-open3d
+  xvfb x11-apps
 )
 
 missing=()

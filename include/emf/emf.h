@@ -214,6 +214,19 @@ EMF_API emf_status emf_system_save_mesh(emf_system* system, int32_t volume_id, c
 EMF_API emf_status emf_system_render(emf_system* system, const emf_pose* T_world_camera,
                                      float* depth_m, int32_t* volume_ids);
 
+/** The association map of the last processed frame for one volume (0 = background, else an
+ *  object id): q(u) in [0, 1], the probability that the depth measured at pixel u belongs to
+ *  that volume (the E-step's posterior, the paper's q_0 / q_i), NaN where the frame had no
+ *  depth. Written into `q` as width * height floats, row-major, tightly packed (the
+ *  intrinsics' size; the buffer is the caller's). The next emf_system_process_frame replaces
+ *  the map this call reads. Together with
+ *  emf_system_render's volume ids (the rendered object masks at the current pose) this is what
+ *  `emf run --view` draws. EMF_ERROR_NOT_FOUND when no E-step ran in the last frame (no object
+ *  alive and no detection) or `volume_id` was not in it; EMF_ERROR_STATE before the first
+ *  frame. Not concurrent with other calls on `system`. */
+EMF_API emf_status emf_system_get_association(const emf_system* system, int32_t volume_id,
+                                              float* q);
+
 /* ---- Runtime: emf owns the loop (capture thread -> frame ring -> SLAM thread) ---------- */
 
 /** A runtime: a source, its capture thread, the frame ring, the SLAM thread. Opaque. */

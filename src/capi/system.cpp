@@ -547,6 +547,34 @@ EMF_API emf_status emf_system_save_mesh(emf_system* system, int32_t volume_id, c
   });
 }
 
+EMF_API emf_status emf_system_get_association(const emf_system* system, int32_t volume_id,
+                                              float* q) {
+  return guard("emf_system_get_association", [&]() -> emf_status {
+    const char* fn = "emf_system_get_association";
+    if (!system) return fail(EMF_ERROR_INVALID_ARGUMENT, std::string(fn) + ": system is NULL");
+    if (!q) return fail(EMF_ERROR_INVALID_ARGUMENT, std::string(fn) + ": q is NULL");
+    emf::capi::requireIdle(*system, fn);
+    emf::capi::requireSlam(*system, fn);
+    if (system->slam->framesProcessed() == 0) {
+      return fail(EMF_ERROR_STATE, std::string(fn) + ": no frame processed yet");
+    }
+    const emf::pipeline::SlamSystem::Associations a = system->slam->associations();
+    for (size_t i = 0; i < a.ids.size(); ++i) {
+      if (a.ids[i] != volume_id) continue;
+      cv::Mat m = a.q[i];
+      if (!m.isContinuous()) m = m.clone();
+      std::memcpy(q, m.ptr<float>(), m.total() * sizeof(float));
+      return EMF_OK;
+    }
+    return fail(EMF_ERROR_NOT_FOUND,
+                std::string(fn) + ": volume " + std::to_string(volume_id) +
+                    (a.ids.empty() ? " has no association map: no E-step ran in the last frame "
+                                     "(no object alive and no detection)"
+                                   : " was not in the last frame's E-step (deleted, dormant or "
+                                     "never an object)"));
+  });
+}
+
 EMF_API emf_status emf_system_render(emf_system* system, const emf_pose* T_world_camera,
                                      float* depth_m, int32_t* volume_ids) {
   return guard("emf_system_render", [&]() -> emf_status {

@@ -6,15 +6,18 @@
 // and the final run.json, and a SIGKILL leaves the trajectories of every frame processed.
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <opencv2/imgproc.hpp>
 
 #include "cl/context.h"
 #include "cli/arg_parser.h"
 #include "cli/commands.h"
 #include "cli/interrupt.h"
 #include "cli/load_config.h"
+#include "cli/run_viewer.h"
 #include "common/error.h"
 #include "common/log.h"
 #include "io/atomic_output.h"
@@ -59,6 +62,12 @@ int cmdRun(const std::vector<std::string>& args) {
   p.option("detector-config", &detector_config, "STR",
            "configuration string for the plugin (detector.plugin_config)");
   p.flag("quiet", &quiet, "no progress line");
+  RunViewerOptions view;
+  p.flag("view", &view.window,
+         "a live window: objects over the colour image, association maps, depth, top view ('q' "
+         "closes it; frames it cannot draw in time are skipped, never the SLAM's)");
+  p.option("video", &view.video_path, "FILE", "the same pictures, one per frame, as .avi or .mp4");
+  p.option("frames-png", &view.png_dir, "DIR", "the same pictures as DIR/<frame>.png");
   if (auto code = p.parse(args)) return *code;
   if (!frames_text.empty()) sets.push_back("source.max_frames=" + frames_text);
   Config config = loadConfig(config_file, sets);
@@ -113,9 +122,19 @@ int cmdRun(const std::vector<std::string>& args) {
   // Images: the object ids are ray cast here at each frame's estimated pose; the association
   // maps are those of the frame's last E-step.
   std::unique_ptr<map::RayCaster> id_renderer;
-  if (config.output.write_images) {
-    id_renderer = std::make_unique<map::RayCaster>(ctx, config.map, k.width, k.height);
+  const bool viewing = view.window || !view.video_path.empty() || !view.png_dir.empty();
+  // The viewer's object masks are cast at half the resolution (a quarter of the rays) and shown
+  // scaled up; images/ keeps the full resolution.
+  const io::Intrinsics id_camera =
+      config.output.write_images ? k
+                                 : k.scaled(std::max(2, k.width / 2), std::max(2, k.height / 2));
+  if (config.output.write_images || viewing) {
+    id_renderer =
+        std::make_unique<map::RayCaster>(ctx, config.map, id_camera.width, id_camera.height);
   }
+  std::unique_ptr<RunViewer> viewer;
+  if (viewing) viewer = std::make_unique<RunViewer>(view, cv::Size(k.width, k.height));
+  std::vector<double> viewer_ms;  // SLAM-thread time per frame spent on the viewer
 
   int64_t total = src->size();
   if (config.source.max_frames > 0 && (total < 0 || total > config.source.max_frames)) {
@@ -148,7 +167,11 @@ int cmdRun(const std::vector<std::string>& args) {
     checkpoint(0);
     while (!interrupt.requested() &&
            (config.source.max_frames == 0 || n < config.source.max_frames) && src->next(frame)) {
+      const auto frame_t0 = std::chrono::steady_clock::now();
       const pipeline::FrameOutcome o = slam.process(frame);
+      const double frame_ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - frame_t0)
+              .count();
       objects.add(o);
       if (o.lost) {
         info.lost.push_back({o.index, frame.timestamp, o.loss_reason});
@@ -174,12 +197,35 @@ int cmdRun(const std::vector<std::string>& args) {
       }
       if (id_renderer) {
         cv::Mat ids;
-        id_renderer->render(slam.renderItems(), k, o.T_world_camera);
+        id_renderer->render(slam.renderItems(), id_camera, o.T_world_camera);
         id_renderer->download(nullptr, nullptr, &ids);
+        if (ids.cols != k.width) {
+          cv::resize(ids, ids, cv::Size(k.width, k.height), 0, 0, cv::INTER_NEAREST);
+        }
         std::vector<pipeline::AssociationImage> maps;
         const pipeline::SlamSystem::Associations a = slam.associations();
         for (size_t i = 0; i < a.ids.size(); ++i) maps.push_back({a.ids[i], a.q[i]});
-        objects.writeFrameImages(o, frame.color, ids, maps);
+        if (config.output.write_images) objects.writeFrameImages(o, frame.color, ids, maps);
+        if (viewer) {
+          pipeline::ViewFrame v;
+          v.index = o.index;
+          v.timestamp = frame.timestamp;
+          v.color = frame.color.clone();  // the source reuses its buffers
+          v.depth = frame.depth.clone();
+          v.object_ids = ids;
+          v.association = std::move(maps);
+          v.T_world_camera = o.T_world_camera;
+          v.objects = o.objects;
+          v.lost = o.lost;
+          v.ms = frame_ms;
+          v.pool_occupancy = slam.pool().stats().occupancy();
+          v.dropped_frames = src->droppedFrames();
+          viewer->submit(std::move(v));
+          viewer_ms.push_back(
+              std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - frame_t0)
+                  .count() -
+              frame_ms);
+        }
       }
       ++n;
       const int mesh_every = config.output.mesh_checkpoint_frames;
@@ -210,6 +256,15 @@ int cmdRun(const std::vector<std::string>& args) {
         info.error.empty() ? pipeline::RunStatus::kFinished : pipeline::RunStatus::kFailed;
   }
   progress.finish();
+  if (viewer) {
+    try {
+      viewer->finish();
+    } catch (const std::exception& e) {
+      const std::string viewer_error = e.what();
+      info.error = info.error.empty() ? viewer_error : info.error + "; " + viewer_error;
+      if (info.status == pipeline::RunStatus::kFinished) info.status = pipeline::RunStatus::kFailed;
+    }
+  }
   try {
     objects.finish(volume_of);
   } catch (const std::exception& e) {
@@ -261,6 +316,17 @@ int cmdRun(const std::vector<std::string>& args) {
         "created: the map is incomplete; raise map.memory_mb (%d MiB)\n",
         static_cast<long long>(slam.backgroundPoolFullFrames()),
         static_cast<long long>(slam.poolRefusedObjects()), config.map.memory_mb);
+  }
+  if (viewer) {
+    std::vector<double> sorted = viewer_ms;
+    std::sort(sorted.begin(), sorted.end());
+    const double median = sorted.empty() ? 0.0 : sorted[sorted.size() / 2];
+    std::printf(
+        "viewer: %lld frame(s) shown, %lld skipped by the window, %lld written; %.2f ms median "
+        "per frame on the SLAM thread (object ids ray cast + hand-over)\n",
+        static_cast<long long>(viewer->framesShown()),
+        static_cast<long long>(viewer->framesDropped()),
+        static_cast<long long>(viewer->framesWritten()), median);
   }
   std::printf("outputs in %s: camera.txt background.ply run.json, %zu object(s)%s\n",
               std::filesystem::absolute(out_dir).string().c_str(), info.objects->size(),

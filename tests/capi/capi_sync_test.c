@@ -411,6 +411,10 @@ int main(int argc, char** argv) {
   render_ids = (int32_t*)malloc(pixels * sizeof(int32_t));
   diffs = (float*)malloc(pixels * sizeof(float));
   CHECK(emf_system_render(sys, NULL, render_depth, render_ids) == EMF_OK);
+  /* The static room has no object and no detector: no E-step ran, so no association map. */
+  CHECK_MSG(emf_system_get_association(sys, 0, render_depth), EMF_ERROR_NOT_FOUND,
+            "no E-step ran in the last frame");
+  CHECK_MSG(emf_system_get_association(sys, 0, NULL), EMF_ERROR_INVALID_ARGUMENT, "q is NULL");
   valid = 0;
   background = 0;
   for (i = 0; i < pixels; ++i) {

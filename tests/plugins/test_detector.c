@@ -12,11 +12,12 @@
  *     host must step through the array by the plugin's struct_size. Two good detections, and a
  *     third whose struct_size differs from the first's.
  *  9 "faulty": one good detection per frame, except on the frames its config names:
- *     "segfault=N,abort=M,hang=K,garbage=G" (any subset; -1 = never) — a null write, abort(),
+ *     "segfault=N,abort=M,hang=K,garbage=G" (any subset; -1 = never) — SIGSEGV, abort(),
  *     sleeping forever, and a result whose detections pointer is garbage (the host's reading of
  *     it crashes). For process isolation (detector.isolation: process). */
 #include <emf/emf_detector.h>
 #include <math.h>
+#include <signal.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -125,10 +126,8 @@ static emf_status detect(emf_detector* d, const emf_detector_frame* f, emf_detec
   d->result.count = 6;
   d->result.detections = d->dets;
   if (TEST_PLUGIN_KIND == 9) {
-    if (f->frame_index == d->segfault_at) {
-      int* volatile nowhere = NULL; /* volatile: the compiler cannot see it is null */
-      *nowhere = 1;
-    }
+    /* raise(): a null write would be caught by UBSan first in the sanitizer builds. */
+    if (f->frame_index == d->segfault_at) raise(SIGSEGV);
     if (f->frame_index == d->abort_at) abort();
     if (f->frame_index == d->hang_at) {
       for (;;) sleep(1);
