@@ -215,6 +215,7 @@ int cmdRun(const std::vector<std::string>& args) {
           v.object_ids = ids;
           v.association = std::move(maps);
           v.T_world_camera = o.T_world_camera;
+          v.intrinsics = k;
           v.objects = o.objects;
           v.lost = o.lost;
           v.ms = frame_ms;

@@ -130,12 +130,15 @@ cv::Mat RunView::topView(cv::Size size) const {
   for (const auto& [id, path] : object_paths_) {
     for (const auto& p : path) extend(p);
   }
-  const double span = std::max({x1 - x0, z1 - z0, 1.0}) * 1.15;
+  // The drawing area leaves the title's band free (kTitleBand of the height).
+  constexpr double kTitleBand = 0.12, kMargin = 1.2;
+  const double area_h = size.height * (1.0 - kTitleBand);
+  const double span = std::max({x1 - x0, z1 - z0, 1.0}) * kMargin;
   const double cx = 0.5 * (x0 + x1), cz = 0.5 * (z0 + z1);
-  const double s = std::min(size.width, size.height) / span;
+  const double s = std::min<double>(size.width, area_h) / span;
   const auto pixel = [&](const Eigen::Vector3d& p) {
     return cv::Point(static_cast<int>(size.width / 2.0 + (p.x() - cx) * s),
-                     static_cast<int>(size.height / 2.0 - (p.z() - cz) * s));
+                     static_cast<int>(size.height - area_h / 2.0 - (p.z() - cz) * s));
   };
   const auto polyline = [&](const std::vector<Eigen::Vector3d>& path, const cv::Scalar& c) {
     for (size_t i = 1; i < path.size(); ++i) {
@@ -173,10 +176,29 @@ cv::Mat RunView::compose(const ViewFrame& f) {
   camera_position_ = f.T_world_camera.translation();
   camera_forward_ = f.T_world_camera.linear().col(2);
   camera_path_.push_back(camera_position_);
-  for (const ObjectOutcome& o : f.objects) {
-    if (o.state == ObjectState::kTracked) {
-      object_paths_[o.id].push_back(o.T_world_object.translation());
+  // Where each tracked object is seen: the pixel centroid of its rendered mask, at the median
+  // measured depth over the mask, in the world.
+  std::map<int, cv::Point2d> sum;
+  std::map<int, std::vector<float>> depths;
+  for (int y = 0; y < h; ++y) {
+    const int32_t* ids = f.object_ids.ptr<int32_t>(y);
+    const float* d = f.depth.ptr<float>(y);
+    for (int x = 0; x < w; ++x) {
+      if (ids[x] <= 0 || !std::isfinite(d[x]) || d[x] <= 0) continue;
+      sum[ids[x]] += cv::Point2d(x, y);
+      depths[ids[x]].push_back(d[x]);
     }
+  }
+  const io::Intrinsics& k = f.intrinsics;
+  for (const ObjectOutcome& o : f.objects) {
+    auto it = depths.find(o.id);
+    if (o.state != ObjectState::kTracked || it == depths.end() || k.fx <= 0 || k.fy <= 0) continue;
+    std::vector<float>& z = it->second;
+    std::nth_element(z.begin(), z.begin() + static_cast<long>(z.size() / 2), z.end());
+    const double depth = z[z.size() / 2];
+    const cv::Point2d c = sum[o.id] / static_cast<double>(z.size());
+    const Eigen::Vector3d p_camera((c.x - k.cx) / k.fx * depth, (c.y - k.cy) / k.fy * depth, depth);
+    object_paths_[o.id].push_back(f.T_world_camera * p_camera);
   }
 
   cv::Mat panel(h + hh, w + hw, CV_8UC3, cv::Scalar(0, 0, 0));

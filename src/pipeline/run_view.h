@@ -14,7 +14,8 @@
 //   +-------------+-------------+-------------+
 //
 // The top view looks down the world's y axis (x right, z up in the picture), the world being
-// the first camera's frame; it keeps the camera's and every object's path so far.
+// the first camera's frame; it keeps the camera's path and every object's (the point seen at
+// the centre of its rendered mask, at the median measured depth there) so far.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -37,6 +38,7 @@ struct ViewFrame {
   cv::Mat object_ids;                         // CV_32S, the rendered volume ids (<= 0: none)
   std::vector<AssociationImage> association;  // q per volume (id 0 = background), depth size
   Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();
+  io::Intrinsics intrinsics;           // of the depth image (places objects in the top view)
   std::vector<ObjectOutcome> objects;  // FrameOutcome::objects
   bool lost = false;                   // camera tracking failed
   double ms = 0;                       // the SLAM's time for this frame
