@@ -82,6 +82,9 @@ int cmdRun(const std::vector<std::string>& args) {
                                 pipeline::pluginSearchPath(config.detector));
   }
 
+  const bool viewing = view.window || !view.video_path.empty() || !view.png_dir.empty();
+  if (viewing) RunViewer::checkOptions(view);  // no display, a video name OpenCV cannot write
+
   // The folder before the device and the source: an unwritable --out fails in milliseconds.
   const pipeline::RunFolder folder(out_dir, force);
   pipeline::RunInfo info;
@@ -99,12 +102,27 @@ int cmdRun(const std::vector<std::string>& args) {
   std::unique_ptr<cl::Context> ctx_ptr;
   std::unique_ptr<io::FrameSource> src;
   std::unique_ptr<pipeline::SlamSystem> slam_ptr;
+  io::Intrinsics k, id_camera;
+  // Images and the viewer: the object ids are ray cast here at each frame's estimated pose
+  // (the viewer's at half the resolution, a quarter of the rays, shown scaled up; images/ at
+  // full resolution); the association maps are those of the frame's last E-step.
+  std::unique_ptr<map::RayCaster> id_renderer;
+  std::unique_ptr<RunViewer> viewer;
   try {
     ctx_ptr = std::make_unique<cl::Context>(config.cl);
     src = io::openSource(source, config.source);
     info.source_description = src->describe();
     logInfo("source: ", src->describe(), "; device: ", ctx_ptr->device().device_name);
     slam_ptr = std::make_unique<pipeline::SlamSystem>(*ctx_ptr, config, src->intrinsics(), source);
+    k = src->intrinsics();
+    id_camera = config.output.write_images
+                    ? k
+                    : k.scaled(std::max(2, k.width / 2), std::max(2, k.height / 2));
+    if (config.output.write_images || viewing) {
+      id_renderer =
+          std::make_unique<map::RayCaster>(*ctx_ptr, config.map, id_camera.width, id_camera.height);
+    }
+    if (viewing) viewer = std::make_unique<RunViewer>(view, cv::Size(k.width, k.height));
   } catch (const std::exception& e) {
     // No SLAM to summarise: run.json keeps the start-up fields and says why it failed.
     info.status = pipeline::RunStatus::kFailed;
@@ -114,26 +132,10 @@ int cmdRun(const std::vector<std::string>& args) {
   }
   cl::Context& ctx = *ctx_ptr;
   pipeline::SlamSystem& slam = *slam_ptr;
-  const io::Intrinsics k = src->intrinsics();
   pipeline::ObjectOutputs objects(out_dir, config.output.binary_ply, info.run_id);
   slam.setDeletionHook(
       [&objects](const pipeline::TrackedObject& o) { objects.onObjectDeleted(o.id, *o.volume); });
   const auto volume_of = [&slam](int id) { return slam.volume(id); };
-  // Images: the object ids are ray cast here at each frame's estimated pose; the association
-  // maps are those of the frame's last E-step.
-  std::unique_ptr<map::RayCaster> id_renderer;
-  const bool viewing = view.window || !view.video_path.empty() || !view.png_dir.empty();
-  // The viewer's object masks are cast at half the resolution (a quarter of the rays) and shown
-  // scaled up; images/ keeps the full resolution.
-  const io::Intrinsics id_camera =
-      config.output.write_images ? k
-                                 : k.scaled(std::max(2, k.width / 2), std::max(2, k.height / 2));
-  if (config.output.write_images || viewing) {
-    id_renderer =
-        std::make_unique<map::RayCaster>(ctx, config.map, id_camera.width, id_camera.height);
-  }
-  std::unique_ptr<RunViewer> viewer;
-  if (viewing) viewer = std::make_unique<RunViewer>(view, cv::Size(k.width, k.height));
   std::vector<double> viewer_ms;  // SLAM-thread time per frame spent on the viewer
 
   int64_t total = src->size();

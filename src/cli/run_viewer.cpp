@@ -14,9 +14,8 @@ constexpr const char* kWindow = "emf run";
 
 }  // namespace
 
-RunViewer::RunViewer(const RunViewerOptions& options, cv::Size depth_size) : options_(options) {
-  const cv::Size panel(depth_size.width / 2 * 3, depth_size.height / 2 * 3);
-  if (options_.window) {
+void RunViewer::checkOptions(const RunViewerOptions& options) {
+  if (options.window) {
     const char* x = std::getenv("DISPLAY");
     const char* wayland = std::getenv("WAYLAND_DISPLAY");
     if (!(x && *x) && !(wayland && *wayland)) {
@@ -25,17 +24,22 @@ RunViewer::RunViewer(const RunViewerOptions& options, cv::Size depth_size) : opt
           "--video FILE or --frames-png DIR to see the run afterwards");
     }
   }
-  if (!options_.video_path.empty()) {
-    const std::string ext = std::filesystem::path(options_.video_path).extension().string();
-    int fourcc = 0;
-    if (ext == ".avi") {
-      fourcc = cv::VideoWriter::fourcc('M', 'J', 'P', 'G');
-    } else if (ext == ".mp4") {
-      fourcc = cv::VideoWriter::fourcc('m', 'p', '4', 'v');
-    } else {
-      throw InvalidArgument("--video " + options_.video_path +
+  if (!options.video_path.empty()) {
+    const std::string ext = std::filesystem::path(options.video_path).extension().string();
+    if (ext != ".avi" && ext != ".mp4") {
+      throw InvalidArgument("--video " + options.video_path +
                             ": the name must end in .avi (Motion JPEG) or .mp4 (MPEG-4)");
     }
+  }
+}
+
+RunViewer::RunViewer(const RunViewerOptions& options, cv::Size depth_size) : options_(options) {
+  checkOptions(options_);
+  const cv::Size panel(depth_size.width / 2 * 3, depth_size.height / 2 * 3);
+  if (!options_.video_path.empty()) {
+    const std::string ext = std::filesystem::path(options_.video_path).extension().string();
+    const int fourcc = ext == ".avi" ? cv::VideoWriter::fourcc('M', 'J', 'P', 'G')
+                                     : cv::VideoWriter::fourcc('m', 'p', '4', 'v');
     const std::filesystem::path parent = std::filesystem::path(options_.video_path).parent_path();
     std::error_code ec;
     if (!parent.empty()) std::filesystem::create_directories(parent, ec);

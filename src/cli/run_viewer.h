@@ -30,6 +30,10 @@ class RunViewer {
   /// Frames written / shown may wait in a queue this long before the hand-over blocks.
   static constexpr size_t kQueuedFrames = 4;
 
+  /// The checks that need no frame: a display for the window, a video name OpenCV can write
+  /// (.avi / .mp4). Throws InvalidArgument naming the flag. (The constructor repeats them.)
+  static void checkOptions(const RunViewerOptions& options);
+
   /// Checks everything before the first frame: a display for the window ($DISPLAY or
   /// $WAYLAND_DISPLAY), a video file OpenCV can encode with `frame_size` (the panel, see
   /// RunView), the PNG folder (created). Throws InvalidArgument / IoError naming the flag.
