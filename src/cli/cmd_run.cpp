@@ -269,6 +269,7 @@ int cmdRun(const std::vector<std::string>& args) {
     }
   }
   try {
+    camera.sync();
     objects.finish(volume_of);
   } catch (const std::exception& e) {
     const std::string output_error = std::string("object outputs: ") + e.what();

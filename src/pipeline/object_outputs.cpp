@@ -114,6 +114,7 @@ void ObjectOutputs::ensureDir(const std::string& dir) const {
 
 void ObjectOutputs::appendPose(Track& t, double timestamp,
                                const Eigen::Isometry3d& T_object_camera) {
+  if (t.summary.deleted) return;  // its file is complete and closed: never reopened (truncated)
   if (!t.T_object_camera) {
     ensureDir(dir_);
     const int id = t.summary.id;
@@ -178,6 +179,12 @@ void ObjectOutputs::add(const FrameOutcome& outcome) {
         s.deleted_frame = outcome.index;
         s.deleted_timestamp = outcome.timestamp;
         s.deleted_reason = o.deleted_reason;
+        // Its trajectory is complete: synced and closed, so a long run with many objects
+        // coming and going holds one file open per live object only.
+        if (t.T_object_camera) {
+          t.T_object_camera->sync();
+          t.T_object_camera.reset();
+        }
         break;
     }
   }

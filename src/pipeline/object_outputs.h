@@ -73,8 +73,8 @@ class ObjectOutputs {
   ObjectOutputs(std::string dir, bool binary_ply, std::string run_id = "");
 
   /// Records one frame's objects (call for every FrameOutcome, in order) and appends their
-  /// poses to object-<id>.txt (created at an object's first pose). Throws IoError when a
-  /// trajectory cannot be written.
+  /// poses to object-<id>.txt (created at an object's first pose, synced and closed when the
+  /// object is deleted). Throws IoError when a trajectory cannot be written.
   void add(const FrameOutcome& outcome);
   /// Asks the disk to keep every trajectory written so far (fdatasync). Throws IoError.
   void sync();

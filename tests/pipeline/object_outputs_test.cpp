@@ -123,6 +123,9 @@ TEST(ObjectOutputs, EachFramesPosesAreInTheFileAsSoonAsItIsAdded) {
     EXPECT_EQ(io::readTrajectory(dir + "/object-1.txt").size(), car_poses) << "frame " << f.index;
   }
   EXPECT_EQ(car_poses, 4u);
+  // The cup was deleted in frame 4: its file is closed and a stray pose for it changes nothing.
+  out.add(frame(5, {object(2, "cup", ObjectState::kTracked, 15.0)}));
+  EXPECT_EQ(io::readTrajectory(dir + "/object-2.txt").size(), 2u);
   EXPECT_NE(test::readText(dir + "/object-1.txt").find("emf run 20261127T000000Z-42"),
             std::string::npos);
   EXPECT_EQ(out.summaries()[0].trajectory_file, "object-1.txt");
