@@ -4,6 +4,7 @@
 
 #include "cl/cl_error.h"
 #include "cl/embedded_kernels.h"
+#include "cl/work_counters.h"
 #include "common/log.h"
 
 namespace emf::cl {
@@ -156,15 +157,20 @@ void Context::write(const MemHandle& mem, const void* host, size_t bytes, size_t
   if (bytes == 0) return;
   EMF_CL_CHECK(clEnqueueWriteBuffer(queue_.get(), mem.get(), CL_TRUE, offset, bytes, host, 0,
                                     nullptr, nullptr));
+  countHostWait();
 }
 
 void Context::read(const MemHandle& mem, void* host, size_t bytes, size_t offset) const {
   if (bytes == 0) return;
   EMF_CL_CHECK(clEnqueueReadBuffer(queue_.get(), mem.get(), CL_TRUE, offset, bytes, host, 0,
                                    nullptr, nullptr));
+  countHostWait(bytes);
 }
 
-void Context::finish() const { EMF_CL_CHECK(clFinish(queue_.get())); }
+void Context::finish() const {
+  EMF_CL_CHECK(clFinish(queue_.get()));
+  countHostWait();
+}
 
 void enqueue(cl_command_queue q, const KernelHandle& k, size_t gx, size_t gy, size_t gz,
              size_t local_x, size_t local_y) {
@@ -181,6 +187,7 @@ void enqueue(cl_command_queue q, const KernelHandle& k, size_t gx, size_t gy, si
   const cl_int err = clEnqueueNDRangeKernel(q, k.get(), dims, nullptr, global,
                                             use_local ? local : nullptr, 0, nullptr, nullptr);
   if (err != CL_SUCCESS) check(err, "clEnqueueNDRangeKernel(" + kernelName(k.get()) + ")");
+  countLaunch();
 }
 
 }  // namespace emf::cl

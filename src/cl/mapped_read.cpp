@@ -2,6 +2,7 @@
 
 #include "cl/cl_error.h"
 #include "cl/context.h"
+#include "cl/work_counters.h"
 #include "common/log.h"
 
 namespace emf::cl {
@@ -13,6 +14,7 @@ MappedRead::MappedRead(const Context& ctx, const MemHandle& mem, size_t bytes, s
   ptr_ = clEnqueueMapBuffer(ctx.queue(), mem.get(), CL_TRUE, CL_MAP_READ, offset, bytes, 0, nullptr,
                             nullptr, &err);
   check(err, "clEnqueueMapBuffer(" + std::to_string(bytes) + " bytes, read)");
+  countHostWait(bytes);
 }
 
 MappedRead::~MappedRead() {
@@ -21,6 +23,7 @@ MappedRead::~MappedRead() {
   // released, which the next write to it would wait for or fail on).
   cl_int err = clEnqueueUnmapMemObject(ctx_.queue(), mem_.get(), ptr_, 0, nullptr, nullptr);
   if (err == CL_SUCCESS) err = clFinish(ctx_.queue());
+  countHostWait();
   if (err != CL_SUCCESS) {
     logWarning("clEnqueueUnmapMemObject failed: ", errorName(err));
   }

@@ -79,7 +79,7 @@ int cmdSynth(const std::vector<std::string>& args) {
   p.option("threads", &threads, "N", "rendering threads (default: all cores)");
   p.option("movers", &movers, "N", "random only: moving objects, 1-4 (default: from the seed)");
   p.option("still", &still, "N",
-           "random only: still detected objects, 0-3 (default: from the seed)");
+           "random only: still detected objects, 0-4 (default: from the seed, 0-3)");
   p.option("camera", &camera, "NAME",
            "random only: camera family, " + joinNames(io::synth::cameraFamilyNames()) +
                " (default: from the seed)");
@@ -146,7 +146,7 @@ int cmdSynth(const std::vector<std::string>& args) {
     o.random.movers = static_cast<int>(v);
   }
   if (!still.empty()) {
-    if (!parseFlag(p, "still", still, 0, 3, &v)) return kExitUsage;
+    if (!parseFlag(p, "still", still, 0, 4, &v)) return kExitUsage;
     o.random.still = static_cast<int>(v);
   }
   if (!camera.empty()) {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "cl/work_counters.h"
 #include "common/error.h"
 #include "common/log.h"
 
@@ -120,7 +121,7 @@ SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrins
       raycaster_(ctx, config.map, intrinsics.width, intrinsics.height),
       timer_(stageNames(), 4096),
       counters_({"track_iterations", "object_track_iterations", "object_track_pixels",
-                 "integrated_blocks"},
+                 "integrated_blocks", "kernel_launches", "host_waits", "bytes_read"},
                 4096) {
   // Pixel thresholds of the object rules are given for 640x480 images: scale them to the frame,
   // and for the visibility rule to the size of its ray cast.
@@ -193,6 +194,7 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
                           std::to_string(frame.depth.cols) + "x" +
                           std::to_string(frame.depth.rows));
   }
+  const cl::WorkCounts work_before = cl::workCounts();
   FrameOutcome out;
   out.index = frames_;
   out.timestamp = frame.timestamp;
@@ -300,6 +302,12 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
   fillObjectOutcomes(&out);
   out.confirmed = std::move(confirmed_now_);
   confirmed_now_.clear();
+  // The OpenCL work of this frame (process-wide counts: a detector thread of the async mode
+  // using emf's cl wrappers would be counted here too; the plugins use their own runtimes).
+  const cl::WorkCounts work = cl::workCounts();
+  counters_.add("kernel_launches", static_cast<double>(work.launches - work_before.launches));
+  counters_.add("host_waits", static_cast<double>(work.host_waits - work_before.host_waits));
+  counters_.add("bytes_read", static_cast<double>(work.bytes_read - work_before.bytes_read));
   timer_.endFrame();
   counters_.endFrame();
   ++frames_;

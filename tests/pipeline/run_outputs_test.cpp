@@ -80,7 +80,7 @@ TEST_F(RunOutputs, SummaryHasObjectsDetectorAndError) {
   EXPECT_FALSE(plain.contains("signal"));
   // The work counters are always there (no frames yet: count 0).
   for (const char* counter : {"track_iterations", "object_track_iterations", "object_track_pixels",
-                              "integrated_blocks"}) {
+                              "integrated_blocks", "kernel_launches", "host_waits", "bytes_read"}) {
     ASSERT_TRUE(plain["work_per_frame"].contains(counter)) << counter;
     EXPECT_EQ(plain["work_per_frame"][counter]["count"], 0) << counter;
   }

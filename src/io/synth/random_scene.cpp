@@ -285,9 +285,9 @@ RandomScene makeRandomScene(uint64_t seed, const RandomSceneOptions& options) {
     throw InvalidArgument("synth:random: movers " + std::to_string(options.movers) +
                           " is out of range [1, 4] (0 = drawn from the seed)");
   }
-  if (options.still < -1 || options.still > 3) {
+  if (options.still < -1 || options.still > 4) {
     throw InvalidArgument("synth:random: still " + std::to_string(options.still) +
-                          " is out of range [0, 3] (-1 = drawn from the seed)");
+                          " is out of range [0, 4] (-1 = drawn from the seed)");
   }
   const auto& cameras = cameraFamilyNames();
   if (!options.camera.empty() &&

@@ -19,7 +19,7 @@
 //    Paths keep clear of each other, of the furniture and of the camera at every instant,
 //    but pass in front of and behind each other and the furniture as seen from the camera.
 //  - 0-3 still objects the detector reports (a teddy on the floor, a chair, a vase, a
-//    suitcase): they never move.
+//    suitcase; up to 4 when asked for): they never move.
 //  - Camera families (cameraFamilyNames()): sweep (hand-held, sideways, 1.6-3 m from the
 //    objects), xyz (small translations and rotations about a fixed point, as TUM fr1/xyz),
 //    orbit (around the objects at 1.5-1.9 m). The wall the camera faces stays within 4.1 m
@@ -52,7 +52,7 @@ struct RandomSceneOptions {
   int frames = 600;
   /// Moving objects, 1-4; 0 = drawn from the seed.
   int movers = 0;
-  /// Still objects the detector reports, 0-3; -1 = drawn from the seed.
+  /// Still objects the detector reports, 0-4 (a seed draws 0-3); -1 = drawn from the seed.
   int still = -1;
   /// Camera family (cameraFamilyNames()); empty = drawn from the seed.
   std::string camera;

@@ -143,7 +143,7 @@ SynthOptions synthOptionsFromQuery(const std::string& preset,
       if (key == "movers") {
         o.random.movers = static_cast<int>(parseInteger(preset, key, value, 1, 4));
       } else if (key == "still") {
-        o.random.still = static_cast<int>(parseInteger(preset, key, value, 0, 3));
+        o.random.still = static_cast<int>(parseInteger(preset, key, value, 0, 4));
       } else if (key == "camera") {
         const auto& cams = cameraFamilyNames();
         if (std::find(cams.begin(), cams.end(), value) == cams.end()) {

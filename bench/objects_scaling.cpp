@@ -1,0 +1,189 @@
+// objects_scaling: what each object alive costs per frame. One generated scene with up to eight
+// detected objects (synth:random, 4 movers and 4 still, a perfect detector every 10 frames, the
+// small `xyz` camera motion; seed 4 keeps 7 of them alive at once) is rendered once per image
+// size; the SLAM then runs on the same frames with objects.max_objects = 0, 1, 2, 4, 7 in one
+// invocation (the 0-object run is the baseline). For the frames from --warmup on where exactly that many
+// objects are alive it prints the ms per frame (median, p90) and per stage, and the counts that
+// do not depend on the machine's load: kernel launches, blocking host waits and bytes read
+// back per frame. Last, the marginal cost of one more object (least-squares slope over the
+// counts that were reached).
+//
+//   objects_scaling [--frames N] [--seed S] [--sizes 320,640] [--counts 0,1,2,4,7]
+//                   [--warmup F]
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <map>
+#include <sstream>
+#include <vector>
+
+#include "bench_args.h"
+#include "cl/context.h"
+#include "common/config.h"
+#include "io/frame_source.h"
+#include "pipeline/slam_system.h"
+
+namespace {
+
+using emf::pipeline::ObjectState;
+using emf::pipeline::SlamSystem;
+
+std::vector<long> parseList(const std::string& option, const std::string& text, long lo, long hi) {
+  std::vector<long> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) out.push_back(emf::bench::parseInteger(option, item, lo, hi));
+  if (out.empty()) throw emf::bench::UsageError(option + ": empty list");
+  return out;
+}
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[static_cast<size_t>(p * static_cast<double>(v.size() - 1) + 0.5)];
+}
+
+struct Row {
+  long objects = 0;
+  size_t frames = 0;  // measured frames (exactly `objects` alive)
+  double ms_median = 0, ms_p90 = 0;
+  std::map<std::string, double> stage_median;
+  double launches = 0, waits = 0, mb_read = 0;  // medians per frame
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  long frames = 120, seed = 4, warmup = 40;
+  std::vector<long> sizes = {320, 640}, counts = {0, 1, 2, 4, 7};
+  try {
+    emf::bench::ArgWalker args(argc, argv);
+    while (args.next()) {
+      if (args.is("--frames")) {
+        frames = args.integer(20, 100000);
+      } else if (args.is("--seed")) {
+        seed = args.integer(1, 1000000);
+      } else if (args.is("--warmup")) {
+        warmup = args.integer(0, 100000);
+      } else if (args.is("--sizes")) {
+        sizes = parseList("--sizes", args.value(), 160, 1280);
+      } else if (args.is("--counts")) {
+        counts = parseList("--counts", args.value(), 0, 8);
+      } else {
+        args.unknown();
+      }
+    }
+    if (warmup >= frames) throw emf::bench::UsageError("--warmup must be below --frames");
+  } catch (const emf::bench::UsageError& e) {
+    std::fprintf(stderr,
+                 "objects_scaling: %s\nusage: objects_scaling [--frames N] [--seed S] "
+                 "[--sizes 320,640] [--counts 0,1,2,4,7] [--warmup F]\n",
+                 e.what());
+    return emf::bench::kExitUsage;
+  }
+  try {
+    emf::Config base;
+    emf::cl::Context ctx(base.cl);
+    for (const long width : sizes) {
+      const long height = width * 3 / 4;
+      const std::string uri =
+          "synth:random?seed=" + std::to_string(seed) +
+          "&movers=4&still=4&camera=xyz&frames=" + std::to_string(frames) +
+          "&width=" + std::to_string(width) + "&height=" + std::to_string(height) +
+          "&det_every=10&det_miss=0&det_fp=0&det_confusion=0&det_spill=0&det_partial=0&det_late=0";
+      auto src = emf::io::openSource(uri, base.source);
+      const emf::io::Intrinsics k = src->intrinsics();
+      std::vector<emf::io::Frame> scene;
+      emf::io::Frame f;
+      while (src->next(f)) scene.push_back(f);
+      std::printf(
+          "\n== %ldx%ld, %zu frames of %s\n   measured from frame %ld, on frames with "
+          "exactly N objects alive; device %s\n",
+          width, height, scene.size(), uri.c_str(), warmup, ctx.device().device_name.c_str());
+      std::vector<Row> rows;
+      for (const long n : counts) {
+        emf::Config c = base;
+        c.objects.max_objects = static_cast<int>(n);
+        c.validate();
+        SlamSystem slam(ctx, c, k, uri);
+        std::vector<double> ms;
+        std::vector<size_t> alive_at;
+        for (const emf::io::Frame& frame : scene) {
+          const auto t0 = std::chrono::steady_clock::now();
+          const auto out = slam.process(frame, frame.detections ? &*frame.detections : nullptr);
+          ms.push_back(
+              std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                  .count());
+          size_t alive = 0;
+          for (const auto& o : out.objects) {
+            alive += o.state != ObjectState::kDeleted && o.state != ObjectState::kDormant;
+          }
+          alive_at.push_back(alive);
+        }
+        Row r;
+        r.objects = n;
+        std::vector<size_t> use;
+        for (size_t i = static_cast<size_t>(warmup); i < ms.size(); ++i) {
+          if (alive_at[i] == static_cast<size_t>(n)) use.push_back(i);
+        }
+        r.frames = use.size();
+        const auto pick = [&](const std::vector<double>& all) {
+          std::vector<double> v;
+          for (size_t i : use) v.push_back(all[i]);
+          return v;
+        };
+        r.ms_median = percentile(pick(ms), 0.5);
+        r.ms_p90 = percentile(pick(ms), 0.9);
+        for (const auto& stage : SlamSystem::stageNames()) {
+          r.stage_median[stage] = percentile(pick(slam.timer().samples(stage)), 0.5);
+        }
+        r.launches = percentile(pick(slam.counters().samples("kernel_launches")), 0.5);
+        r.waits = percentile(pick(slam.counters().samples("host_waits")), 0.5);
+        r.mb_read = percentile(pick(slam.counters().samples("bytes_read")), 0.5) / (1 << 20);
+        rows.push_back(r);
+      }
+      std::printf("   %-7s %6s %9s %7s |", "objects", "frames", "ms median", "p90");
+      for (const auto& stage : SlamSystem::stageNames()) std::printf(" %9.9s", stage.c_str());
+      std::printf(" | %8s %6s %7s\n", "launches", "waits", "MB read");
+      for (const Row& r : rows) {
+        if (r.frames == 0) {
+          std::printf("   %-7ld %6s  (never exactly %ld alive after the warm-up)\n", r.objects, "0",
+                      r.objects);
+          continue;
+        }
+        std::printf("   %-7ld %6zu %9.2f %7.2f |", r.objects, r.frames, r.ms_median, r.ms_p90);
+        for (const auto& stage : SlamSystem::stageNames()) {
+          std::printf(" %9.2f", r.stage_median.at(stage));
+        }
+        std::printf(" | %8.0f %6.0f %7.2f\n", r.launches, r.waits, r.mb_read);
+      }
+      // Least-squares slope over the rows that were measured.
+      double sx = 0, sy = 0, sxx = 0, sxy = 0, sl = 0, slx = 0, sw = 0, swx = 0;
+      int m = 0;
+      for (const Row& r : rows) {
+        if (r.frames == 0) continue;
+        const double x = static_cast<double>(r.objects);
+        sx += x;
+        sxx += x * x;
+        sy += r.ms_median;
+        sxy += x * r.ms_median;
+        sl += r.launches;
+        slx += x * r.launches;
+        sw += r.waits;
+        swx += x * r.waits;
+        ++m;
+      }
+      const double den = m * sxx - sx * sx;
+      if (m >= 2 && den > 0) {
+        std::printf(
+            "   per object alive: %+.2f ms per frame, %+.1f kernel launches, %+.1f host "
+            "waits (least squares over %d counts)\n",
+            (m * sxy - sx * sy) / den, (m * slx - sx * sl) / den, (m * swx - sx * sw) / den, m);
+      }
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "objects_scaling: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
