@@ -29,13 +29,19 @@ double percentile(std::vector<double> v, double p) {
 
 }  // namespace
 
+constexpr const char* kUsage =
+    "usage: isolation_bench [--frames N] [--width W] [--height H] [--out DIR]\n";
+
 int main(int argc, char** argv) {
   int frames = 60, width = 640, height = 480;
   std::string out = "out/isolation_bench";
   try {
     emf::bench::ArgWalker args(argc, argv);
     while (args.next()) {
-      if (args.is("--frames")) {
+      if (args.is("--help") || args.is("-h")) {
+        std::fputs(kUsage, stdout);
+        return 0;
+      } else if (args.is("--frames")) {
         frames = static_cast<int>(args.integer(2, 100000));
       } else if (args.is("--width")) {
         width = static_cast<int>(args.integer(64, 4096));
@@ -48,10 +54,7 @@ int main(int argc, char** argv) {
       }
     }
   } catch (const emf::bench::UsageError& e) {
-    std::fprintf(stderr,
-                 "isolation_bench: %s\nusage: isolation_bench [--frames N] [--width W] "
-                 "[--height H] [--out DIR]\n",
-                 e.what());
+    std::fprintf(stderr, "isolation_bench: %s\n%s", e.what(), kUsage);
     return emf::bench::kExitUsage;
   }
   try {

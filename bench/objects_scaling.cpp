@@ -2,9 +2,9 @@
 // detected objects (synth:random, 4 movers and 4 still, a perfect detector every 10 frames, the
 // small `xyz` camera motion; seed 4 keeps 7 of them alive at once) is rendered once per image
 // size; the SLAM then runs on the same frames with objects.max_objects = 0, 1, 2, 4, 7 in one
-// invocation (the 0-object run is the baseline). For the frames from --warmup on where exactly that many
-// objects are alive it prints the ms per frame (median, p90) and per stage, and the counts that
-// do not depend on the machine's load: kernel launches, blocking host waits and bytes read
+// invocation (the 0-object run is the baseline). For the frames from --warmup on where exactly that
+// many objects are alive it prints the ms per frame (median, p90) and per stage, and the counts
+// that do not depend on the machine's load: kernel launches, blocking host waits and bytes read
 // back per frame. Last, the marginal cost of one more object (least-squares slope over the
 // counts that were reached).
 //
@@ -53,13 +53,20 @@ struct Row {
 
 }  // namespace
 
+constexpr const char* kUsage =
+    "usage: objects_scaling [--frames N] [--seed S] [--sizes 320,640] [--counts 0,1,2,4,7] "
+    "[--warmup F]\n";
+
 int main(int argc, char** argv) {
   long frames = 120, seed = 4, warmup = 40;
   std::vector<long> sizes = {320, 640}, counts = {0, 1, 2, 4, 7};
   try {
     emf::bench::ArgWalker args(argc, argv);
     while (args.next()) {
-      if (args.is("--frames")) {
+      if (args.is("--help") || args.is("-h")) {
+        std::fputs(kUsage, stdout);
+        return 0;
+      } else if (args.is("--frames")) {
         frames = args.integer(20, 100000);
       } else if (args.is("--seed")) {
         seed = args.integer(1, 1000000);
@@ -75,10 +82,7 @@ int main(int argc, char** argv) {
     }
     if (warmup >= frames) throw emf::bench::UsageError("--warmup must be below --frames");
   } catch (const emf::bench::UsageError& e) {
-    std::fprintf(stderr,
-                 "objects_scaling: %s\nusage: objects_scaling [--frames N] [--seed S] "
-                 "[--sizes 320,640] [--counts 0,1,2,4,7] [--warmup F]\n",
-                 e.what());
+    std::fprintf(stderr, "objects_scaling: %s\n%s", e.what(), kUsage);
     return emf::bench::kExitUsage;
   }
   try {

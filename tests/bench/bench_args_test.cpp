@@ -114,6 +114,9 @@ TEST(BenchPrograms, BadArgumentsStopWithExitCode2AndNameTheOption) {
       {"slam_bench", "--res 1024", "--res '1024': use 640 (640x480@1cm) or 320"},
       {"slam_bench", "--peer-stride 0", "--peer-stride '0': expected an integer in [1, 64]"},
       {"slam_bench", "--no-pear", "unknown option '--no-pear'"},
+      {"objects_scaling", "--counts 0,9", "--counts '9': expected an integer in [0, 8]"},
+      {"objects_scaling", "--frames 50 --warmup 50", "--warmup must be below --frames"},
+      {"isolation_bench", "--width 10", "--width '10': expected an integer in [64, 4096]"},
       {"dnn_bench", "--instances 21", "--instances '21': expected an integer in [1, 20]"},
       {"dnn_bench", "--depth 640x", "--depth '640x': expected WxH"},
   };
