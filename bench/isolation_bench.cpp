@@ -16,16 +16,11 @@
 #include "pipeline/detector_plugin.h"
 #include "pipeline/isolated_detector.h"
 #include "pipeline/plugin_search_path.h"
+#include "pipeline/stage_timer.h"
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[static_cast<size_t>(p * static_cast<double>(v.size() - 1) + 0.5)];
-}
 
 }  // namespace
 
@@ -100,12 +95,12 @@ int main(int argc, char** argv) {
                 width, height, a_ms.size(),
                 static_cast<double>(detections) / static_cast<double>(a_ms.size() + 1));
     std::printf("  %-12s %8s %8s\n", "", "median", "p90");
-    std::printf("  %-12s %6.2f ms %6.2f ms\n", "in-process", percentile(a_ms, 0.5),
-                percentile(a_ms, 0.9));
-    std::printf("  %-12s %6.2f ms %6.2f ms\n", "process", percentile(b_ms, 0.5),
-                percentile(b_ms, 0.9));
+    const auto a = emf::pipeline::summarize(a_ms), b = emf::pipeline::summarize(b_ms),
+               d = emf::pipeline::summarize(diff_ms);
+    std::printf("  %-12s %6.2f ms %6.2f ms\n", "in-process", a.median_ms, a.p90_ms);
+    std::printf("  %-12s %6.2f ms %6.2f ms\n", "process", b.median_ms, b.p90_ms);
     std::printf("  %-12s %6.2f ms %6.2f ms  (per frame, process - in-process)\n", "added",
-                percentile(diff_ms, 0.5), percentile(diff_ms, 0.9));
+                d.median_ms, d.p90_ms);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "isolation_bench: %s\n", e.what());
     return 1;

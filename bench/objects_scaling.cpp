@@ -22,6 +22,7 @@
 #include "common/config.h"
 #include "io/frame_source.h"
 #include "pipeline/slam_system.h"
+#include "pipeline/stage_timer.h"
 
 namespace {
 
@@ -37,11 +38,7 @@ std::vector<long> parseList(const std::string& option, const std::string& text, 
   return out;
 }
 
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[static_cast<size_t>(p * static_cast<double>(v.size() - 1) + 0.5)];
-}
+double median(const std::vector<double>& v) { return emf::pipeline::summarize(v).median_ms; }
 
 struct Row {
   long objects = 0;
@@ -136,14 +133,15 @@ int main(int argc, char** argv) {
           for (size_t i : use) v.push_back(all[i]);
           return v;
         };
-        r.ms_median = percentile(pick(ms), 0.5);
-        r.ms_p90 = percentile(pick(ms), 0.9);
+        const emf::pipeline::TimingSummary t = emf::pipeline::summarize(pick(ms));
+        r.ms_median = t.median_ms;
+        r.ms_p90 = t.p90_ms;
         for (const auto& stage : SlamSystem::stageNames()) {
-          r.stage_median[stage] = percentile(pick(slam.timer().samples(stage)), 0.5);
+          r.stage_median[stage] = median(pick(slam.timer().samples(stage)));
         }
-        r.launches = percentile(pick(slam.counters().samples("kernel_launches")), 0.5);
-        r.waits = percentile(pick(slam.counters().samples("host_waits")), 0.5);
-        r.mb_read = percentile(pick(slam.counters().samples("bytes_read")), 0.5) / (1 << 20);
+        r.launches = median(pick(slam.counters().samples("kernel_launches")));
+        r.waits = median(pick(slam.counters().samples("host_waits")));
+        r.mb_read = median(pick(slam.counters().samples("bytes_read"))) / (1 << 20);
         rows.push_back(r);
       }
       std::printf("   %-7s %6s %9s %7s |", "objects", "frames", "ms median", "p90");

@@ -408,7 +408,15 @@ bool Openni2Source::next(io::Frame& frame) {
     // end (OpenNI2's .oni player reports no frame count for files made by its own recorder).
     if (!live_ && waited >= std::min(timeout_s_, kRecordingEndWaitS)) return false;
     if (waited >= timeout_s_) {
-      if (num_frames_ > 0) return false;  // a finite virtual recording that ran out
+      if (num_frames_ > 0) {
+        // A finite virtual device that ran out: the frames it served that were never read
+        // (all of them when the SLAM started after it finished) were dropped.
+        if (live_ && last_frame_index_ < num_frames_) {
+          dropped_ += num_frames_ - last_frame_index_;
+          last_frame_index_ = static_cast<int>(num_frames_);
+        }
+        return false;
+      }
       throw SensorDisconnected("openni2: no depth frame from '" + device_uri_ + "' for " +
                                std::to_string(timeout_s_) + " s (after " +
                                std::to_string(delivered_) +

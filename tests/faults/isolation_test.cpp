@@ -31,16 +31,6 @@ const std::string kFaulty = std::string(EMF_TEST_PLUGIN_DIR) + "/libemf_detector
 constexpr double kDeadlineS = 30.0;
 constexpr double kLoadS = 60.0;
 
-io::Intrinsics camera() {
-  io::Intrinsics k;
-  k.fx = k.fy = 65.625;
-  k.cx = 39.5;
-  k.cy = 29.5;
-  k.width = 80;
-  k.height = 60;
-  return k;
-}
-
 io::Frame frame(int64_t index) {
   io::Frame f;
   f.index = index;
@@ -53,7 +43,7 @@ io::Frame frame(int64_t index) {
 
 std::unique_ptr<IsolatedDetector> start(const std::string& config, double deadline_s = kDeadlineS) {
   return std::make_unique<IsolatedDetector>(detectorHostPath(), kFaulty, config, "synth:test",
-                                            camera(), deadline_s, kLoadS);
+                                            test::camera80x60(), deadline_s, kLoadS);
 }
 
 // The faulty plugin's one detection: "cup", 0.9, box (20, 10, 40, 20), mask = the box.
@@ -73,7 +63,7 @@ void expectTheCup(const DetectorOutput& out) {
 TEST(Isolation, DetectionsAreTheSameAsInProcess) {
   ASSERT_TRUE(kChildSignalsPass);
   auto isolated = start("");
-  auto in_process = DetectorPlugin::load(kFaulty, {}, "", "synth:test", camera());
+  auto in_process = DetectorPlugin::load(kFaulty, {}, "", "synth:test", test::camera80x60());
   const DetectorOutput a = isolated->detect(frame(0));
   const DetectorOutput b = in_process->detect(frame(0));
   expectTheCup(a);

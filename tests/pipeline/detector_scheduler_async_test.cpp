@@ -13,15 +13,7 @@ namespace {
 
 constexpr double kPoseTolerance = 1e-12;  // poses are copied, not computed
 
-io::Intrinsics smallCamera() {
-  io::Intrinsics k;
-  k.fx = k.fy = 80;
-  k.cx = 39.5;
-  k.cy = 29.5;
-  k.width = 80;
-  k.height = 60;
-  return k;
-}
+io::Intrinsics smallCamera() { return test::camera80x60(); }
 
 io::Frame makeFrame(int64_t index) {
   io::Frame f;

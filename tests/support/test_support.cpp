@@ -47,6 +47,16 @@ std::string tempDir(const std::string& tag) {
   return p.string();
 }
 
+io::Intrinsics camera80x60() {
+  io::Intrinsics k;
+  k.fx = k.fy = 80;
+  k.cx = 39.5;
+  k.cy = 29.5;
+  k.width = 80;
+  k.height = 60;
+  return k;
+}
+
 std::string readText(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());

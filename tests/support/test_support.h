@@ -8,6 +8,7 @@
 
 #include "cl/cl_error.h"
 #include "cl/context.h"
+#include "io/frame.h"
 
 namespace emf::test {
 
@@ -15,6 +16,10 @@ namespace emf::test {
 std::string dataPath(const std::string& name);
 /// A fresh empty temporary folder, removed at process exit.
 std::string tempDir(const std::string& tag);
+/// An 80x60 pinhole camera (fx = fy = 80, principal point at the centre) for tests that need
+/// only a small frame size.
+io::Intrinsics camera80x60();
+
 /// The whole file as text ("" when it cannot be read).
 std::string readText(const std::string& path);
 /// Runs a shell command, returns its exit code and puts stdout+stderr into *output.
