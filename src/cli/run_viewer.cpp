@@ -1,6 +1,14 @@
 #include "cli/run_viewer.h"
 
+#include <netdb.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <opencv2/highgui.hpp>
 
@@ -12,6 +20,41 @@ namespace {
 
 constexpr const char* kWindow = "emf run";
 
+// Whether the X display named by $DISPLAY accepts a connection ("" = yes, else why not): its
+// toolkit (Qt or GTK) would otherwise abort the process in the middle of the run. Local
+// displays (":N") are the socket /tmp/.X11-unix/XN, others ("host:N", ssh's "localhost:10")
+// TCP port 6000 + N.
+std::string displayProblem(const std::string& display) {
+  const size_t colon = display.rfind(':');
+  if (colon == std::string::npos) return "DISPLAY='" + display + "' has no ':<number>'";
+  const std::string host = display.substr(0, colon);
+  const int number = std::atoi(display.c_str() + colon + 1);
+  int fd = -1;
+  int rc = -1;
+  if (host.empty() || host == "unix") {
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    std::snprintf(addr.sun_path, sizeof(addr.sun_path), "/tmp/.X11-unix/X%d", number);
+    fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    if (fd >= 0) rc = ::connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof(addr));
+  } else {
+    addrinfo hints{};
+    hints.ai_socktype = SOCK_STREAM;
+    addrinfo* found = nullptr;
+    if (::getaddrinfo(host.c_str(), std::to_string(6000 + number).c_str(), &hints, &found) == 0) {
+      for (addrinfo* a = found; a && rc != 0; a = a->ai_next) {
+        if (fd >= 0) ::close(fd);
+        fd = ::socket(a->ai_family, a->ai_socktype | SOCK_CLOEXEC, a->ai_protocol);
+        if (fd >= 0) rc = ::connect(fd, a->ai_addr, a->ai_addrlen);
+      }
+      ::freeaddrinfo(found);
+    }
+  }
+  const int err = errno;
+  if (fd >= 0) ::close(fd);
+  return rc == 0 ? "" : "cannot connect to the X display '" + display + "': " + std::strerror(err);
+}
+
 }  // namespace
 
 void RunViewer::checkOptions(const RunViewerOptions& options) {
@@ -22,6 +65,14 @@ void RunViewer::checkOptions(const RunViewerOptions& options) {
       throw InvalidArgument(
           "--view needs a display ($DISPLAY is not set: no X server, e.g. over ssh); use "
           "--video FILE or --frames-png DIR to see the run afterwards");
+    }
+    if (x && *x) {
+      const std::string problem = displayProblem(x);
+      if (!problem.empty()) {
+        throw InvalidArgument("--view: " + problem +
+                              "; start the X server or fix $DISPLAY, or use --video FILE or "
+                              "--frames-png DIR");
+      }
     }
   }
   if (!options.video_path.empty()) {

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <array>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -134,6 +135,14 @@ TEST(Viewer, WithoutADisplayTheWindowIsAClearError) {
                              &out),
             1);
   EXPECT_NE(out.find("--view needs a display ($DISPLAY is not set"), std::string::npos) << out;
+  // A display nobody serves: refused before the run (the toolkit would abort in the middle).
+  EXPECT_EQ(test::runCommand("DISPLAY=:987 " + kCli + " run" + kSmall +
+                                 " --source 'synth:room?frames=2&width=160&height=120' --view "
+                                 "--out " +
+                                 dir + "/2",
+                             &out),
+            1);
+  EXPECT_NE(out.find("--view: cannot connect to the X display ':987'"), std::string::npos) << out;
 }
 
 // An X window dump (xwd -root) as BGR: the ZPixmap of a 24-bit TrueColor root (24 or 32 bits
@@ -186,7 +195,15 @@ TEST(Viewer, TheWindowShowsThePicturesUnderXvfb) {
   char number[16] = {0};
   ASSERT_GT(read(fds[0], number, sizeof(number) - 1), 0);
   close(fds[0]);
-  const std::string display = ":" + std::string(number).substr(0, std::string(number).find('\n'));
+  std::string digits;
+  for (const char* c = number; *c && std::isdigit(static_cast<unsigned char>(*c)); ++c)
+    digits += *c;
+  ASSERT_FALSE(digits.empty()) << "Xvfb wrote no display number: '" << number << "'";
+  const std::string display = ":" + digits;
+  // Its socket must accept connections before emf starts (emf checks, then refuses).
+  for (int i = 0; i < 500 && !fs::exists("/tmp/.X11-unix/X" + digits); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
   struct Reaper {
     pid_t pid;
     ~Reaper() {
@@ -207,19 +224,29 @@ TEST(Viewer, TheWindowShowsThePicturesUnderXvfb) {
     _exit(127);
   }
   const auto t0 = std::chrono::steady_clock::now();
+  bool exited = false;
+  int status = 0;
   while (!fs::exists(dir + "/png/000030.png") &&
          std::chrono::steady_clock::now() - t0 < std::chrono::seconds(120)) {
+    if (waitpid(emf, &status, WNOHANG) == emf) {
+      exited = true;
+      break;
+    }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
+  ASSERT_FALSE(exited) << "emf ended before its 30th picture:\n" << test::readText(dir + "/log");
+  ASSERT_TRUE(fs::exists(dir + "/png/000030.png"))
+      << "no 30th picture in 120 s; emf's log so far:\n"
+      << test::readText(dir + "/log");
   std::string out;
   ASSERT_EQ(test::runCommand("xwd -root -silent -display " + display + " -out " + dir + "/shot.xwd",
                              &out),
             0)
       << out;
-  kill(emf, SIGINT);
-  int status = 0;
+  // SIGTERM, not SIGINT: a test run as a background job has SIGINT ignored, and emf keeps that.
+  kill(emf, SIGTERM);
   waitpid(emf, &status, 0);
-  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 130) << test::readText(dir + "/log");
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 143) << test::readText(dir + "/log");
   const cv::Mat shot = readXwd(dir + "/shot.xwd");
   ASSERT_FALSE(shot.empty());
   // Somewhere on the screen (where the toolkit put the window) is one of the run's pictures:
