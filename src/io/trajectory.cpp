@@ -6,6 +6,7 @@
 #include <tuple>
 
 #include "common/error.h"
+#include "common/log.h"
 #include "io/atomic_output.h"
 #include "io/text_table.h"
 
@@ -35,10 +36,32 @@ std::optional<Eigen::Isometry3d> poseFromTum(double tx, double ty, double tz, do
 /// Positions farther from the origin than this (metres) are not a camera trajectory.
 constexpr double kMaxCoordinateM = 1e6;
 
+namespace {
+
+// Whether the file's last byte is a newline (true for an empty or unreadable file).
+bool endsWithNewline(const std::string& path) {
+  FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return true;
+  bool newline = true;
+  if (std::fseek(f, -1, SEEK_END) == 0) newline = std::fgetc(f) == '\n';
+  std::fclose(f);
+  return newline;
+}
+
+}  // namespace
+
 Trajectory readTrajectory(const std::string& path) {
   Trajectory traj;
   traj.source = path;
-  for (const TableRow& row : readTable(path, /*commas_separate=*/true)) {
+  std::vector<TableRow> rows = readTable(path, /*commas_separate=*/true);
+  // A process killed while appending (emf run streams its trajectories) can leave the last line
+  // cut short: without its newline and with fewer than 8 fields it is that, not a bad file.
+  if (!rows.empty() && rows.back().fields.size() < 8 && !endsWithNewline(path)) {
+    logWarning(fileLine(path, rows.back().line),
+               ": an unfinished last line (a write that was interrupted); ignored");
+    rows.pop_back();
+  }
+  for (const TableRow& row : rows) {
     expectFields(row, 8, path, "timestamp tx ty tz qx qy qz qw");
     double v[8];
     static const char* kNames[8] = {"timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};

@@ -2,7 +2,8 @@
 // with one write(2), so a killed process leaves every pose appended before the kill; sync() also
 // asks the disk to keep them (a power cut loses only what came after the last sync). The file is
 // readable by readTrajectory at any moment: a write that fails half-way (disk full, file size
-// limit) is cut back to the last whole line.
+// limit) is cut back to the last whole line, and one cut short by a SIGKILL (the kernel may
+// stop a write between two pages) leaves an unfinished last line that readTrajectory ignores.
 #pragma once
 
 #include <Eigen/Geometry>

@@ -2,6 +2,7 @@
 #include "io/trajectory.h"
 
 #include <filesystem>
+#include <fstream>
 
 #include "common/error.h"
 #include "io_test_util.h"
@@ -63,6 +64,20 @@ TEST(Trajectory, WriteReadRoundTripIsAtomic) {
 // 1 % scale) is written as a unit quaternion, so that the file reads back.
 constexpr double kUnitQuaternionTol = 1e-8;
 constexpr double kDriftScale = 0.01;  // the rotation read back is the nearest one within that
+
+TEST(Trajectory, AnUnfinishedLastLineOfAKilledWriterIsIgnored) {
+  // SIGKILL can stop a write(2) between two pages: the file ends in part of a line.
+  const std::string path = test::tempDir("traj-cut") + "/camera.txt";
+  std::ofstream(path) << "# timestamp tx ty tz qx qy qz qw\n"
+                      << "1.000000 0.1 0.2 0.3 0 0 0 1\n"
+                      << "1.033333 0.1 0.2 0.3 0 0";
+  const Trajectory t = readTrajectory(path);
+  ASSERT_EQ(t.size(), 1u);
+  EXPECT_NEAR(t.poses[0].translation().z(), 0.3, 1e-12);
+  // The same short line with its newline is a broken file, named.
+  std::ofstream(path, std::ios::app) << "\n";
+  EXPECT_THROW(readTrajectory(path), IoError);
+}
 
 TEST(Trajectory, WritesUnitQuaternionsForDriftedRotations) {
   const std::string dir = test::tempDir("traj_drift");
