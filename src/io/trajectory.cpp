@@ -48,48 +48,65 @@ bool endsWithNewline(const std::string& path) {
   return newline;
 }
 
+// Parses one row and appends its pose; throws IoError naming file:line.
+void appendRow(Trajectory& traj, const TableRow& row, const std::string& path);
+
 }  // namespace
 
 Trajectory readTrajectory(const std::string& path) {
   Trajectory traj;
   traj.source = path;
-  std::vector<TableRow> rows = readTable(path, /*commas_separate=*/true);
+  const std::vector<TableRow> rows = readTable(path, /*commas_separate=*/true);
   // A process killed while appending (emf run streams its trajectories) can leave the last line
-  // cut short: without its newline and with fewer than 8 fields it is that, not a bad file.
-  if (!rows.empty() && rows.back().fields.size() < 8 && !endsWithNewline(path)) {
-    logWarning(fileLine(path, rows.back().line),
-               ": an unfinished last line (a write that was interrupted); ignored");
-    rows.pop_back();
-  }
-  for (const TableRow& row : rows) {
-    expectFields(row, 8, path, "timestamp tx ty tz qx qy qz qw");
-    double v[8];
-    static const char* kNames[8] = {"timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
-    for (int i = 0; i < 8; ++i) v[i] = parseFinite(row.fields[i], path, row.line, kNames[i]);
-    for (int i = 1; i <= 3; ++i) {
-      // Squared in the statistics: 1e308 would turn every figure into inf.
-      if (std::abs(v[i]) > kMaxCoordinateM) {
-        throw IoError(fileLine(path, row.line) + ": " + kNames[i] + " = " + row.fields[i] +
-                      " m is beyond +-" + std::to_string(static_cast<int>(kMaxCoordinateM)) +
-                      " m: not a camera position; fix or remove that line");
+  // cut short, without its newline: if that line does not parse, it is that, not a bad file.
+  const bool unfinished_last = !rows.empty() && !endsWithNewline(path);
+  for (size_t r = 0; r < rows.size(); ++r) {
+    const TableRow& row = rows[r];
+    if (unfinished_last && r + 1 == rows.size()) {
+      try {
+        appendRow(traj, row, path);  // appends only after every check passed
+      } catch (const IoError&) {
+        logWarning(fileLine(path, row.line),
+                   ": an unfinished last line (a write that was interrupted); ignored");
       }
+      break;
     }
-    const auto pose = poseFromTum(v[1], v[2], v[3], v[4], v[5], v[6], v[7]);
-    if (!pose) {
-      const double n = std::sqrt(v[4] * v[4] + v[5] * v[5] + v[6] * v[6] + v[7] * v[7]);
-      throw IoError(fileLine(path, row.line) + ": quaternion (qx qy qz qw) has norm " +
-                    std::to_string(n) + ", not 1: not a rotation; fix or remove that line");
-    }
-    if (!traj.empty() && !(v[0] > traj.stamps.back())) {
-      throw IoError(fileLine(path, row.line) + ": timestamp " + row.fields[0] +
-                    " does not increase (previous line has " + std::to_string(traj.stamps.back()) +
-                    "); sort the file and remove duplicates");
-    }
-    traj.stamps.push_back(v[0]);
-    traj.poses.push_back(*pose);
+    appendRow(traj, row, path);
   }
   return traj;
 }
+
+namespace {
+
+void appendRow(Trajectory& traj, const TableRow& row, const std::string& path) {
+  expectFields(row, 8, path, "timestamp tx ty tz qx qy qz qw");
+  double v[8];
+  static const char* kNames[8] = {"timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
+  for (int i = 0; i < 8; ++i) v[i] = parseFinite(row.fields[i], path, row.line, kNames[i]);
+  for (int i = 1; i <= 3; ++i) {
+    // Squared in the statistics: 1e308 would turn every figure into inf.
+    if (std::abs(v[i]) > kMaxCoordinateM) {
+      throw IoError(fileLine(path, row.line) + ": " + kNames[i] + " = " + row.fields[i] +
+                    " m is beyond +-" + std::to_string(static_cast<int>(kMaxCoordinateM)) +
+                    " m: not a camera position; fix or remove that line");
+    }
+  }
+  const auto pose = poseFromTum(v[1], v[2], v[3], v[4], v[5], v[6], v[7]);
+  if (!pose) {
+    const double n = std::sqrt(v[4] * v[4] + v[5] * v[5] + v[6] * v[6] + v[7] * v[7]);
+    throw IoError(fileLine(path, row.line) + ": quaternion (qx qy qz qw) has norm " +
+                  std::to_string(n) + ", not 1: not a rotation; fix or remove that line");
+  }
+  if (!traj.empty() && !(v[0] > traj.stamps.back())) {
+    throw IoError(fileLine(path, row.line) + ": timestamp " + row.fields[0] +
+                  " does not increase (previous line has " + std::to_string(traj.stamps.back()) +
+                  "); sort the file and remove duplicates");
+  }
+  traj.stamps.push_back(v[0]);
+  traj.poses.push_back(*pose);
+}
+
+}  // namespace
 
 std::string tumLine(double stamp, const Eigen::Isometry3d& T) {
   // Normalised: a rotation composed over many frames drifts from orthonormal by round-off,

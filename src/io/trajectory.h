@@ -29,7 +29,7 @@ std::optional<Eigen::Isometry3d> poseFromTum(double tx, double ty, double tz, do
                                              double qz, double qw);
 
 /// Reads a TUM trajectory file. Fields may be separated by spaces, tabs or commas (as the TUM
-/// tools accept). A last line without its newline and with fewer than 8 fields (a writer killed
+/// tools accept). A last line without its newline that does not parse (a writer killed
 /// mid-line) is ignored with a warning. Throws IoError naming file:line for a missing file, a line without 8 numbers,
 /// NaN/inf values, a non-unit quaternion or timestamps that do not increase.
 Trajectory readTrajectory(const std::string& path);

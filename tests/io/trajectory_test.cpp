@@ -74,9 +74,15 @@ TEST(Trajectory, AnUnfinishedLastLineOfAKilledWriterIsIgnored) {
   const Trajectory t = readTrajectory(path);
   ASSERT_EQ(t.size(), 1u);
   EXPECT_NEAR(t.poses[0].translation().z(), 0.3, 1e-12);
-  // The same short line with its newline is a broken file, named.
+  // Cut inside a number: the quaternion is not a rotation: also an unfinished line.
+  std::ofstream(path, std::ios::app) << " 0.9";
+  EXPECT_EQ(readTrajectory(path).size(), 1u);
+  // The same line with its newline is a broken file, named.
   std::ofstream(path, std::ios::app) << "\n";
   EXPECT_THROW(readTrajectory(path), IoError);
+  // A complete last line without a newline (a hand-written file) is read.
+  std::ofstream(path) << "1.000000 0.1 0.2 0.3 0 0 0 1";
+  EXPECT_EQ(readTrajectory(path).size(), 1u);
 }
 
 TEST(Trajectory, WritesUnitQuaternionsForDriftedRotations) {
