@@ -30,8 +30,8 @@ std::optional<Eigen::Isometry3d> poseFromTum(double tx, double ty, double tz, do
 
 /// Reads a TUM trajectory file. Fields may be separated by spaces, tabs or commas (as the TUM
 /// tools accept). A last line without its newline that does not parse (a writer killed
-/// mid-line) is ignored with a warning. Throws IoError naming file:line for a missing file, a line without 8 numbers,
-/// NaN/inf values, a non-unit quaternion or timestamps that do not increase.
+/// mid-line) is ignored with a warning. Throws IoError naming file:line for a missing file, a line
+/// without 8 numbers, NaN/inf values, a non-unit quaternion or timestamps that do not increase.
 Trajectory readTrajectory(const std::string& path);
 
 /// Writes a TUM trajectory file atomically: "%.6f" timestamps, translations and quaternions

@@ -26,10 +26,8 @@ TEST(RunFolder, CreatesTheFolderAndNamesTheRun) {
   const std::string dir = test::tempDir("runfolder-new") + "/a/b";
   const RunFolder f(dir, false);
   EXPECT_TRUE(fs::is_directory(dir));
-  EXPECT_TRUE(std::regex_match(f.runId(), std::regex("[0-9]{8}T[0-9]{6}Z-[0-9]+")))
-      << f.runId();
-  EXPECT_TRUE(std::regex_match(f.startedUtc(),
-                               std::regex("[0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9:]{8}Z")))
+  EXPECT_TRUE(std::regex_match(f.runId(), std::regex("[0-9]{8}T[0-9]{6}Z-[0-9]+"))) << f.runId();
+  EXPECT_TRUE(std::regex_match(f.startedUtc(), std::regex("[0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9:]{8}Z")))
       << f.startedUtc();
   EXPECT_EQ(f.path("camera.txt"), dir + "/camera.txt");
 }
@@ -49,7 +47,8 @@ TEST(RunFolder, AFolderUnderAFileIsAnErrorNamingOut) {
 
 TEST(RunFolder, AnEarlierRunIsAnErrorWithoutReplaceAndRemovedWithIt) {
   const std::string dir = test::tempDir("runfolder-earlier");
-  touch(dir + "/run.json", R"({"run_id": "20260101T000000Z-7", "status": "finished", "frames": 40})");
+  touch(dir + "/run.json",
+        R"({"run_id": "20260101T000000Z-7", "status": "finished", "frames": 40})");
   for (const char* name : {"camera.txt", "background.ply", "object-3.txt", "object-12.ply",
                            "eval.json", "notes.txt", "object-3.txt.bak"}) {
     touch(dir + "/" + name);
@@ -96,8 +95,7 @@ TEST(RunFolder, ASecondWriterIsRefusedWhileTheFirstHoldsIt) {
       FAIL() << "no error";
     } catch (const IoError& e) {
       const std::string m = e.what();
-      EXPECT_NE(m.find("another emf run (pid " + std::to_string(getpid()) + ")"),
-                std::string::npos)
+      EXPECT_NE(m.find("another emf run (pid " + std::to_string(getpid()) + ")"), std::string::npos)
           << m;
     }
   }

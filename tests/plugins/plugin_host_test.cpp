@@ -12,15 +12,7 @@ namespace {
 const std::vector<std::string> kTestPath = {EMF_TEST_PLUGIN_DIR};
 const std::vector<std::string> kBuildPath = {EMF_PLUGIN_BUILD_DIR};
 
-io::Intrinsics smallCamera() {
-  io::Intrinsics k;
-  k.fx = k.fy = 80;
-  k.cx = 39.5;
-  k.cy = 29.5;
-  k.width = 80;
-  k.height = 60;
-  return k;
-}
+io::Intrinsics smallCamera() { return test::camera80x60(); }
 
 io::Frame frame(int64_t index, const std::string& stamp) {
   io::Frame f;

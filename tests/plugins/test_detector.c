@@ -19,10 +19,10 @@
 #include <math.h>
 #include <signal.h>
 #include <stddef.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <stdint.h>
 #include <unistd.h>
 
 #if TEST_PLUGIN_KIND == 4
@@ -61,10 +61,14 @@ static emf_status create(const emf_detector_create_info* info, emf_detector** ou
     const char* p = info->config;
     while (*p) {
       long* field = NULL;
-      if (strncmp(p, "segfault=", 9) == 0) field = &d->segfault_at, p += 9;
-      else if (strncmp(p, "abort=", 6) == 0) field = &d->abort_at, p += 6;
-      else if (strncmp(p, "hang=", 5) == 0) field = &d->hang_at, p += 5;
-      else if (strncmp(p, "garbage=", 8) == 0) field = &d->garbage_at, p += 8;
+      if (strncmp(p, "segfault=", 9) == 0)
+        field = &d->segfault_at, p += 9;
+      else if (strncmp(p, "abort=", 6) == 0)
+        field = &d->abort_at, p += 6;
+      else if (strncmp(p, "hang=", 5) == 0)
+        field = &d->hang_at, p += 5;
+      else if (strncmp(p, "garbage=", 8) == 0)
+        field = &d->garbage_at, p += 8;
       if (!field) {
         snprintf(error, error_size, "test plugin: unknown config '%s'", p);
         free(d);
