@@ -44,8 +44,8 @@ Figures figures(std::vector<double> v) {
   return f;
 }
 
-emf::io::Intrinsics camera(int w, int h) {
-  emf::io::Intrinsics k;
+emf::core::Intrinsics camera(int w, int h) {
+  emf::core::Intrinsics k;
   k.width = w;
   k.height = h;
   k.fx = k.fy = 525.0 * w / 640.0;
@@ -54,8 +54,8 @@ emf::io::Intrinsics camera(int w, int h) {
   return k;
 }
 
-emf::io::Frame frame(int64_t index, int w, int h) {
-  emf::io::Frame f;
+emf::core::Frame frame(int64_t index, int w, int h) {
+  emf::core::Frame f;
   f.index = index;
   f.timestamp = static_cast<double>(index) / 30.0;
   f.timestamp_text = std::to_string(f.timestamp);
@@ -66,17 +66,17 @@ emf::io::Frame frame(int64_t index, int w, int h) {
 
 void asyncSubmit(int w, int h, int frames, double detector_ms, double slam_ms) {
   DetectorOptions o;
-  o.mode = "async";
+  o.mode = emf::pipeline::DetectorMode::kAsync;
   o.every_n_frames = 1;
   const auto sleep_ms = [](double ms) {
     std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(ms));
   };
   DetectorScheduler s(
       o, "standin",
-      [&](const emf::io::Frame& f, const cv::Mat*, const cv::Mat*) {
+      [&](const emf::core::Frame& f, const cv::Mat*, const cv::Mat*) {
         sleep_ms(detector_ms);
         DetectorOutput out;
-        emf::io::Detection d;
+        emf::core::Detection d;
         d.id = 1;
         d.class_name = "car";
         d.score = 0.9f;
@@ -90,7 +90,7 @@ void asyncSubmit(int w, int h, int frames, double detector_ms, double slam_ms) {
   std::vector<emf::pipeline::ObjectPose> objects(3);
   std::vector<double> handover_us, dropped_us, late;
   for (int i = 0; i < frames; ++i) {
-    const emf::io::Frame f = frame(i, w, h);
+    const emf::core::Frame f = frame(i, w, h);
     const int64_t dropped_before = s.stats().dropped_frames;
     const auto t0 = Clock::now();
     const auto b = s.submit(f, Eigen::Isometry3d::Identity(), &q0, nullptr, &objects);
@@ -113,7 +113,7 @@ void asyncSubmit(int w, int h, int frames, double detector_ms, double slam_ms) {
 
 void outputs(int w, int h, int frames, const std::string& dir) {
   emf::pipeline::ObjectOutputs out(dir, true);
-  const emf::io::Frame f = frame(0, w, h);
+  const emf::core::Frame f = frame(0, w, h);
   cv::Mat ids(h, w, CV_32S, cv::Scalar(0));
   std::vector<emf::pipeline::AssociationImage> q;
   q.push_back({0, cv::Mat(h, w, CV_32F, cv::Scalar(0.7f))});

@@ -6,9 +6,10 @@
 #include <string>
 #include <vector>
 
-#include "io/eval.h"
-#include "io/frame_source.h"
+#include "core/frame_source.h"
+#include "eval/eval.h"
 #include "io/klg.h"
+#include "sources/open_source.h"
 
 namespace {
 
@@ -23,14 +24,14 @@ int main(int argc, char** argv) {
   const std::string data = argc > 1 ? argv[1] : std::string(EMF_SOURCE_DIR) + "/../shared/data";
   try {
     // 1. TUM folder reading (PNG depth + JPEG colour decode, conversion to metres).
-    std::vector<emf::io::Frame> frames;
+    std::vector<emf::core::Frame> frames;
     {
       auto t0 = std::chrono::steady_clock::now();
-      auto src = emf::io::openSource("tum:" + data + "/redkitchen-0-299?depth_scale=1000",
-                                     emf::io::SourceOptions{});
+      auto src = emf::sources::openSource("tum:" + data + "/redkitchen-0-299?depth_scale=1000",
+                                          emf::core::SourceOptions{});
       const double open_s = secondsSince(t0);
       t0 = std::chrono::steady_clock::now();
-      emf::io::Frame f;
+      emf::core::Frame f;
       while (src->next(f)) frames.push_back(f);
       const double read_s = secondsSince(t0);
       std::printf(
@@ -51,9 +52,9 @@ int main(int argc, char** argv) {
       std::printf("klg write  %zu frames: %.2f ms/frame, %.1f MB (%.1f%% of raw depth+rgb)\n",
                   frames.size(), write_s * 1e3 / frames.size(), mb, 100 * mb / raw_mb);
       t0 = std::chrono::steady_clock::now();
-      auto src = emf::io::openSource("klg:" + tmp.string() + "?fx=585&fy=585&cx=320&cy=240",
-                                     emf::io::SourceOptions{});
-      emf::io::Frame f;
+      auto src = emf::sources::openSource("klg:" + tmp.string() + "?fx=585&fy=585&cx=320&cy=240",
+                                          emf::core::SourceOptions{});
+      emf::core::Frame f;
       size_t n = 0;
       while (src->next(f)) ++n;
       const double read_s = secondsSince(t0);
@@ -67,8 +68,9 @@ int main(int argc, char** argv) {
       const std::string est = data + "/trajectories/freiburg1_xyz-rgbdslam.txt";
       const int reps = 20;
       auto t0 = std::chrono::steady_clock::now();
-      emf::io::EvalReport r;
-      for (int i = 0; i < reps; ++i) r = emf::io::evaluatePaths(gt, est, emf::io::EvalOptions{});
+      emf::eval::EvalReport r;
+      for (int i = 0; i < reps; ++i)
+        r = emf::eval::evaluatePaths(gt, est, emf::eval::EvalOptions{});
       const double s = secondsSince(t0) / reps;
       std::printf(
           "eval       fr1_xyz reference (read both files, ATE %zu pairs, RPE %zu pairs): "

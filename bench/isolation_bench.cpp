@@ -12,11 +12,12 @@
 #include <vector>
 
 #include "bench_args.h"
-#include "io/frame_source.h"
+#include "core/frame_source.h"
 #include "pipeline/detector_plugin.h"
 #include "pipeline/isolated_detector.h"
 #include "pipeline/plugin_search_path.h"
 #include "pipeline/stage_timer.h"
+#include "sources/open_source.h"
 
 namespace {
 
@@ -63,9 +64,9 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "isolation_bench: '%s' failed\n", synth.c_str());
       return 1;
     }
-    emf::io::SourceOptions so;
-    auto src = emf::io::openSource("tum:" + data, so);
-    const emf::io::Intrinsics k = src->intrinsics();
+    emf::core::SourceOptions so;
+    auto src = emf::sources::openSource("tum:" + data, so);
+    const emf::core::Intrinsics k = src->intrinsics();
     const std::string plugin =
         emf::pipeline::resolvePluginPath("maskfile", emf::pipeline::modulePluginFolders());
     auto in_process = emf::pipeline::DetectorPlugin::load(plugin, {}, "dir=" + data, "", k);
@@ -73,7 +74,7 @@ int main(int argc, char** argv) {
                                              "dir=" + data, "", k, 30.0, 60.0);
     std::vector<double> a_ms, b_ms, diff_ms;
     size_t detections = 0;
-    emf::io::Frame f;
+    emf::core::Frame f;
     for (int i = 0; src->next(f); ++i) {
       double t[2];
       for (int j = 0; j < 2; ++j) {

@@ -32,7 +32,7 @@
 #include "cl/context.h"
 #include "common/error.h"
 #include "common/log.h"
-#include "io/frame_source.h"
+#include "core/frame_source.h"
 #include "io/ply.h"
 #include "map/device_image.h"
 #include "map/mesh.h"
@@ -41,6 +41,7 @@
 #include "map/volume.h"
 #include "map/volume_host_access.h"
 #include "map/voxel_pool.h"
+#include "sources/open_source.h"
 
 namespace {
 
@@ -56,20 +57,20 @@ struct BenchFrame {
 };
 
 struct BenchSequence {
-  emf::io::Intrinsics intrinsics;
+  emf::core::Intrinsics intrinsics;
   std::vector<BenchFrame> frames;
 };
 
 /// Frames with ground truth of the TUM folder `dir` (depth scale as given; intrinsics from its
 /// calibration.txt), at most `max_frames` (0 = all).
 BenchSequence loadTumSequence(const std::string& dir, double depth_scale, int max_frames) {
-  emf::io::SourceOptions options;
+  emf::core::SourceOptions options;
   options.depth_scale = depth_scale;
   options.max_frames = max_frames > 0 ? max_frames : 0;
-  auto source = emf::io::openSource("tum:" + dir, options);
+  auto source = emf::sources::openSource("tum:" + dir, options);
   BenchSequence seq;
   seq.intrinsics = source->intrinsics();
-  emf::io::Frame f;
+  emf::core::Frame f;
   while ((max_frames <= 0 || static_cast<int>(seq.frames.size()) < max_frames) && source->next(f)) {
     if (!f.T_world_camera_gt) continue;  // map_bench integrates with ground-truth poses
     BenchFrame b;
@@ -189,7 +190,7 @@ Result run(emf::cl::Context& ctx, const BenchSequence& seq, const Config& cfg, i
   o.background_voxel_m = cfg.voxel_m;
   o.background_resolution = static_cast<int>(std::lround(5.12 / cfg.voxel_m));
   const bool half = cfg.width * 2 == seq.intrinsics.width;
-  const emf::io::Intrinsics k =
+  const emf::core::Intrinsics k =
       half ? seq.intrinsics.scaled(cfg.width, cfg.height) : seq.intrinsics;
   if (k.width != cfg.width || k.height != cfg.height) {
     throw emf::InvalidArgument("map_bench: resolution " + std::to_string(cfg.width) + "x" +
@@ -346,7 +347,7 @@ Result run(emf::cl::Context& ctx, const BenchSequence& seq, const Config& cfg, i
   const Eigen::Vector3d ext = spec.extentM().cast<double>();
   double sum = 0;
   size_t found = 0, total = 0;
-  const emf::io::Intrinsics& kf = seq.intrinsics;
+  const emf::core::Intrinsics& kf = seq.intrinsics;
   for (size_t i = 0; i < seq.frames.size(); i += static_cast<size_t>(error_every)) {
     const BenchFrame& f = seq.frames[i];
     for (int y = error_stride / 2; y < f.depth_m.rows; y += error_stride) {

@@ -19,10 +19,11 @@
 
 #include "bench_args.h"
 #include "cl/context.h"
-#include "common/config.h"
-#include "io/frame_source.h"
+#include "core/frame_source.h"
+#include "pipeline/config.h"
 #include "pipeline/slam_system.h"
 #include "pipeline/stage_timer.h"
+#include "sources/open_source.h"
 
 namespace {
 
@@ -92,10 +93,10 @@ int main(int argc, char** argv) {
           "&movers=4&still=4&camera=xyz&frames=" + std::to_string(frames) +
           "&width=" + std::to_string(width) + "&height=" + std::to_string(height) +
           "&det_every=10&det_miss=0&det_fp=0&det_confusion=0&det_spill=0&det_partial=0&det_late=0";
-      auto src = emf::io::openSource(uri, base.source);
-      const emf::io::Intrinsics k = src->intrinsics();
-      std::vector<emf::io::Frame> scene;
-      emf::io::Frame f;
+      auto src = emf::sources::openSource(uri, base.source);
+      const emf::core::Intrinsics k = src->intrinsics();
+      std::vector<emf::core::Frame> scene;
+      emf::core::Frame f;
       while (src->next(f)) scene.push_back(f);
       std::printf(
           "\n== %ldx%ld, %zu frames of %s\n   measured from frame %ld, on frames with "
@@ -109,7 +110,7 @@ int main(int argc, char** argv) {
         SlamSystem slam(ctx, c, k, uri);
         std::vector<double> ms;
         std::vector<size_t> alive_at;
-        for (const emf::io::Frame& frame : scene) {
+        for (const emf::core::Frame& frame : scene) {
           const auto t0 = std::chrono::steady_clock::now();
           const auto out = slam.process(frame, frame.detections ? &*frame.detections : nullptr);
           ms.push_back(

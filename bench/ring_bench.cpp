@@ -54,7 +54,7 @@ void protocolOnly(RingPolicy policy, int64_t n) {
               emf::fw::ringPolicyName(policy), ns, sink < 0 ? "!" : "");
 }
 
-void singleThreadCopy(RingPolicy policy, int64_t n, const emf::io::Frame& frame) {
+void singleThreadCopy(RingPolicy policy, int64_t n, const emf::core::Frame& frame) {
   FrameRing ring(options(policy));
   const FrameSlot* slot = nullptr;
   double push_ns = 0, pop_ns = 0;
@@ -75,7 +75,7 @@ void singleThreadCopy(RingPolicy policy, int64_t n, const emf::io::Frame& frame)
       pop_ns / static_cast<double>(n));
 }
 
-void twoThreads(RingPolicy policy, int64_t n, const emf::io::Frame& frame) {
+void twoThreads(RingPolicy policy, int64_t n, const emf::core::Frame& frame) {
   FrameRing ring(options(policy));
   auto t0 = Clock::now();
   std::thread producer([&] {
@@ -115,7 +115,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: ring_bench [frames: an integer in [1, 100000000]]\n");
     return 2;
   }
-  emf::io::Frame frame;
+  emf::core::Frame frame;
   frame.depth = cv::Mat(480, 640, CV_32F);
   cv::randu(frame.depth, 0.5, 4.0);
   frame.color = cv::Mat(480, 640, CV_8UC3);

@@ -27,12 +27,13 @@
 #include <vector>
 
 #include "cl/context.h"
-#include "common/config.h"
 #include "common/error.h"
 #include "common/log.h"
-#include "io/frame_source.h"
+#include "core/frame_source.h"
+#include "pipeline/config.h"
 #include "pipeline/slam_system.h"
 #include "runtime/runtime.h"
+#include "sources/open_source.h"
 
 namespace {
 
@@ -43,16 +44,16 @@ constexpr int kRenderedFrames = 60;
 constexpr int kWarmupFrames = 5;
 
 /// Replays pre-rendered frames at kSensorHz in real time, ping-pong, for `seconds`.
-class PacedSource : public emf::io::FrameSource {
+class PacedSource : public emf::core::FrameSource {
  public:
-  PacedSource(std::vector<emf::io::Frame> frames, emf::io::Intrinsics k, double seconds)
+  PacedSource(std::vector<emf::core::Frame> frames, emf::core::Intrinsics k, double seconds)
       : frames_(std::move(frames)), k_(k), total_(static_cast<int64_t>(seconds * kSensorHz)) {
     scheduled_ns_.resize(static_cast<size_t>(total_), 0);
   }
-  emf::io::Intrinsics intrinsics() const override { return k_; }
+  emf::core::Intrinsics intrinsics() const override { return k_; }
   std::string describe() const override { return "paced synth:room at 30 Hz"; }
   bool isLive() const override { return true; }
-  bool next(emf::io::Frame& frame) override {
+  bool next(emf::core::Frame& frame) override {
     if (next_ >= total_) return false;
     if (next_ == 0) {
       // The runtime reads frame 0 at creation; the clock starts at frame 1.
@@ -65,7 +66,7 @@ class PacedSource : public emf::io::FrameSource {
     const int64_t period = 2 * (static_cast<int64_t>(frames_.size()) - 1);
     int64_t k = next_ % period;
     if (k >= static_cast<int64_t>(frames_.size())) k = period - k;
-    const emf::io::Frame& src = frames_[static_cast<size_t>(k)];
+    const emf::core::Frame& src = frames_[static_cast<size_t>(k)];
     frame.index = next_;
     frame.timestamp = static_cast<double>(due) * 1e-9;
     frame.rgb_timestamp = frame.timestamp;
@@ -84,8 +85,8 @@ class PacedSource : public emf::io::FrameSource {
   }
 
  private:
-  std::vector<emf::io::Frame> frames_;
-  emf::io::Intrinsics k_;
+  std::vector<emf::core::Frame> frames_;
+  emf::core::Intrinsics k_;
   int64_t total_;
   int64_t next_ = 0;
   int64_t start_ns_ = 0;
@@ -103,14 +104,14 @@ double percentile(std::vector<double> v, double p) {
 
 void runOne(int width, int height, double seconds, const std::string& policy) {
   emf::Config config;
-  config.runtime.ring_policy = policy;
+  config.runtime.ring_policy = emf::fw::parseRingPolicy(policy);
   config.validate();
   const std::string uri = "synth:room?frames=" + std::to_string(kRenderedFrames) +
                           "&width=" + std::to_string(width) + "&height=" + std::to_string(height);
-  auto synth = emf::io::openSource(uri, config.source);
-  const emf::io::Intrinsics k = synth->intrinsics();
-  std::vector<emf::io::Frame> frames;
-  emf::io::Frame f;
+  auto synth = emf::sources::openSource(uri, config.source);
+  const emf::core::Intrinsics k = synth->intrinsics();
+  std::vector<emf::core::Frame> frames;
+  emf::core::Frame f;
   while (synth->next(f)) frames.push_back(f);
 
   emf::cl::Context ctx(config.cl);

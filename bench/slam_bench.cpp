@@ -36,12 +36,13 @@
 #include <vector>
 
 #include "bench_args.h"
-#include "common/config.h"
 #include "common/error.h"
-#include "io/eval.h"
-#include "io/frame_source.h"
+#include "core/frame_source.h"
+#include "eval/eval.h"
 #include "io/trajectory.h"
 #include "io/tum_writer.h"
+#include "pipeline/config.h"
+#include "sources/open_source.h"
 
 namespace {
 
@@ -102,7 +103,7 @@ Args parseArgs(int argc, char** argv) {
       }
     } else if (k == "--frames") {
       a.frames = static_cast<int>(
-          emf::bench::parseInteger(k, value(), static_cast<long>(emf::io::kMinAtePairs), 100000));
+          emf::bench::parseInteger(k, value(), static_cast<long>(emf::eval::kMinAtePairs), 100000));
     } else if (k == "--res") {
       const std::string r = value();
       if (r == "640") {
@@ -199,10 +200,10 @@ cv::Mat downsampleDepth(const cv::Mat& depth, int factor) {
 
 /// Writes the frames the two systems will read. Returns the frame count.
 int prepareFrames(const Dataset& d, const Args& a, const std::string& dir) {
-  emf::io::SourceOptions options;
+  emf::core::SourceOptions options;
   options.depth_scale = d.depth_scale;
-  auto src = emf::io::openSource(d.uri, options);
-  const emf::io::Intrinsics k0 = src->intrinsics();
+  auto src = emf::sources::openSource(d.uri, options);
+  const emf::core::Intrinsics k0 = src->intrinsics();
   if (k0.width % a.res.width != 0 || k0.width / a.res.width != k0.height / a.res.height) {
     throw emf::InvalidArgument(d.uri + ": " + std::to_string(k0.width) + "x" +
                                std::to_string(k0.height) + " frames cannot be reduced to " +
@@ -210,12 +211,12 @@ int prepareFrames(const Dataset& d, const Args& a, const std::string& dir) {
                                " by an integer factor");
   }
   const int factor = k0.width / a.res.width;
-  const emf::io::Intrinsics k = k0.scaled(a.res.width, a.res.height);
+  const emf::core::Intrinsics k = k0.scaled(a.res.width, a.res.height);
   fs::remove_all(dir);
   emf::io::TumWriterOptions wo;
   wo.readme_about = "slam_bench frames of " + d.uri;
   emf::io::TumWriter writer(dir, k, wo);
-  emf::io::Frame f;
+  emf::core::Frame f;
   int n = 0;
   while (n < a.frames && src->next(f)) {
     if (!f.T_world_camera_gt) {
@@ -327,18 +328,18 @@ TruthCheck truthCheck(const emf::io::Trajectory& gt, const emf::io::Trajectory& 
                       const emf::io::Trajectory& peer) {
   TruthCheck t;
   try {
-    t.emf_vs_peer_ate_cm = emf::io::computeAte(peer, est).trans_m.rmse * 100;
+    t.emf_vs_peer_ate_cm = emf::eval::computeAte(peer, est).trans_m.rmse * 100;
     std::printf("truth: emf against peer ATE %s cm; RPE rms, rotation deg / translation mm\n",
                 fmt(t.emf_vs_peer_ate_cm, 3).c_str());
     std::vector<double> steps;  // the ground truth has a pose per frame (prepareFrames)
     for (size_t k = 1; k < gt.size(); ++k) steps.push_back(gt.stamps[k] - gt.stamps[k - 1]);
     const double frame_s = percentile(steps, 0.5);
     for (const double delta_s : {frame_s, 1.0}) {
-      const emf::io::ThreeCorneredHat h = emf::io::threeCorneredHat(gt, est, peer, delta_s);
+      const emf::eval::ThreeCorneredHat h = emf::eval::threeCorneredHat(gt, est, peer, delta_s);
       if (delta_s == frame_s) {
         for (int i = 0; i < 3; ++i) t.step_deg[i] = h.rot_deg[i];
       }
-      const auto pair = [](const emf::io::RpeResult& r) {
+      const auto pair = [](const emf::eval::RpeResult& r) {
         return fmt(r.rot_deg.rmse, 3) + " / " + fmt(r.trans_m.rmse * 1e3);
       };
       const auto own = [&h](int i) {
@@ -413,8 +414,8 @@ int main(int argc, char** argv) {
         e.ms = run.at("ms_per_frame").at("total").at("median_ms").get<double>();
         e.p90_ms = run.at("ms_per_frame").at("total").at("p90_ms").get<double>();
         e.rss_mb = er.peak_rss_mb;
-        if (est.size() >= emf::io::kMinAtePairs) {
-          e.ate_cm = emf::io::computeAte(gt, est).trans_m.rmse * 100;
+        if (est.size() >= emf::eval::kMinAtePairs) {
+          e.ate_cm = emf::eval::computeAte(gt, est).trans_m.rmse * 100;
         }
         const auto& mem = run.at("memory");
         std::printf(
@@ -478,7 +479,7 @@ int main(int argc, char** argv) {
           p.ms = percentile(ms, 0.5);
           p.p90_ms = percentile(ms, 0.9);
           p.rss_mb = pr.peak_rss_mb;
-          p.ate_cm = emf::io::computeAte(gt, pest).trans_m.rmse * 100;
+          p.ate_cm = emf::eval::computeAte(gt, pest).trans_m.rmse * 100;
           std::printf(
               "peer:  ATE %s cm over %zu poses, %s ms/frame median, %s p90, peak RSS %.0f MB, "
               "wall %.1f s\n       ran: %s\n",

@@ -14,13 +14,13 @@
 #include <vector>
 
 #include "bench_args.h"
-#include "io/synth/depth_noise.h"
-#include "io/synth/detector_sim.h"
-#include "io/synth/parallel.h"
-#include "io/synth/presets.h"
-#include "io/synth/renderer.h"
-#include "io/synth/synth_source.h"
 #include "io/tum_writer.h"
+#include "synth/depth_noise.h"
+#include "synth/detector_sim.h"
+#include "synth/parallel.h"
+#include "synth/presets.h"
+#include "synth/renderer.h"
+#include "synth/synth_source.h"
 
 namespace {
 
@@ -43,7 +43,7 @@ void usage(std::FILE* out) {
 }
 
 int benchMain(int argc, char** argv) {
-  using namespace emf::io::synth;
+  using namespace emf::synth;
   int frames = 600, width = 640, height = 480, threads = 0;
   std::string write_dir;
   std::vector<std::string> presets;
@@ -140,7 +140,7 @@ int benchMain(int argc, char** argv) {
       t_detect += seconds(c, d);
     }
     // The whole source.
-    emf::io::Frame frame;
+    emf::core::Frame frame;
     const double c_all0 = cpuSeconds();
     const auto a = Clock::now();
     while (source.next(frame)) {

@@ -66,7 +66,7 @@ std::vector<Variant> variants() {
   paper.max_step_scale = 1.0;
   out.push_back({"paper-host", paper});
   TrackOptions dev = paper;
-  dev.final_reduction = "device";
+  dev.final_reduction = emf::track::FinalReduction::kDevice;
   out.push_back({"paper-device", dev});
   TrackOptions early = paper;
   early.early_exit_step = 1e-5;
@@ -137,7 +137,7 @@ void syntheticScene(emf::cl::Context& ctx, const std::string& name, float voxel_
       emf::test::volumeFromSdf([&](const Eigen::Vector3f& x) { return scene.sdf(x); },
                                Eigen::Vector3i::Constant(blocks), voxel_m, 10 * voxel_m, 10.0f);
   const emf::test::DeviceVolume vol = emf::test::upload(ctx, host);
-  emf::io::Intrinsics k = emf::test::smallCamera();
+  emf::core::Intrinsics k = emf::test::smallCamera();
   k = k.scaled(width, width * 3 / 4);
   const Eigen::Isometry3d T_gt = emf::test::roomCornerCamera();
   const cv::Mat depth = scene.render(k, T_gt);
@@ -166,7 +166,7 @@ void syntheticScene(emf::cl::Context& ctx, const std::string& name, float voxel_
 }
 
 void realPairs(emf::cl::Context& ctx, const std::string& data, int repeats) {
-  emf::io::Intrinsics k;
+  emf::core::Intrinsics k;
   k.fx = k.fy = 525.0;
   k.cx = 319.5;
   k.cy = 239.5;
@@ -232,7 +232,7 @@ void kernels(emf::cl::Context& ctx, const std::string& data, int repeats) {
   std::printf("  %-9s %15s %15s %15s %15s %15s %7s\n", "size", "preprocess", "eval:host-sum",
               "eval:device-sum", "eval:stride2", "eval:stride8", "groups");
   for (int width : {640, 320}) {
-    emf::io::Intrinsics k = emf::test::smallCamera().scaled(width, width * 3 / 4);
+    emf::core::Intrinsics k = emf::test::smallCamera().scaled(width, width * 3 / 4);
     const cv::Mat depth = scene.render(k, emf::test::roomCornerCamera());
     emf::track::Preprocessor pre(ctx, emf::track::PreprocessOptions{}, k);
     cv::Mat real_scaled;
@@ -250,7 +250,8 @@ void kernels(emf::cl::Context& ctx, const std::string& data, int repeats) {
     // evaluation, i.e. launch, partial read-back and host sum).
     for (int mode = 0; mode < 4; ++mode) {
       TrackOptions o;
-      o.final_reduction = mode == 1 ? "device" : "host";
+      o.final_reduction =
+          mode == 1 ? emf::track::FinalReduction::kDevice : emf::track::FinalReduction::kHost;
       const int stride = mode == 2 ? 2 : (mode == 3 ? 8 : 1);
       emf::track::Tracker tracker(ctx, o, k.width, k.height);
       groups = tracker.numGroups(1);
@@ -324,7 +325,7 @@ std::vector<SequenceFrame> readSequence(const std::string& dir) {
 }
 
 void sequence(emf::cl::Context& ctx, const std::string& name, const std::string& dir,
-              double depth_scale, const emf::io::Intrinsics& k, int gap, int step) {
+              double depth_scale, const emf::core::Intrinsics& k, int gap, int step) {
   const std::vector<SequenceFrame> frames = readSequence(dir);
   std::printf(
       "\nsequence %s: %zu frames, pairs (i, i+%d) every %d frames, single-frame volume "
@@ -412,9 +413,9 @@ int main(int argc, char** argv) {
     emf::cl::Context ctx(emf::cl::ClOptions{});
     std::printf("track_bench on %s\n", ctx.device().describe().c_str());
     if (sequences_only) {
-      emf::io::Intrinsics kitchen{585, 585, 320, 240, 640, 480};
+      emf::core::Intrinsics kitchen{585, 585, 320, 240, 640, 480};
       sequence(ctx, "redkitchen", data + "/redkitchen-0-299", 1000.0, kitchen, 5, 15);
-      emf::io::Intrinsics fr3{535.4, 539.2, 320.1, 247.6, 640, 480};
+      emf::core::Intrinsics fr3{535.4, 539.2, 320.1, 247.6, 640, 480};
       sequence(ctx, "fr3-cabinet-keyframes", data + "/tum-fr3-cabinet-keyframes", 5000.0, fr3, 1,
                1);
       return 0;

@@ -52,15 +52,16 @@
 
 #include "bench_args.h"
 #include "cl/context.h"
-#include "common/config.h"
 #include "common/error.h"
+#include "core/frame_source.h"
 #include "em/object_rules.h"
-#include "io/eval.h"
-#include "io/frame_source.h"
+#include "eval/eval.h"
 #include "map/device_image.h"
 #include "map/volume.h"
 #include "map/voxel_pool.h"
+#include "pipeline/config.h"
 #include "pipeline/slam_system.h"
+#include "sources/open_source.h"
 #include "track/preprocess.h"
 #include "track/tracker.h"
 
@@ -190,8 +191,8 @@ cv::Mat classify(const cv::Mat& depth) {
 /// --object: `kept` gets only object `id`'s pixels of `f` (NaN elsewhere; no depth at all when
 /// fewer than `min_px` have a measurement) and, as its ground truth, the camera pose in the
 /// object's frame.
-void keepObjectOnly(const emf::io::Frame& f, int id, const std::string& data, int min_px,
-                    emf::io::Frame* kept) {
+void keepObjectOnly(const emf::core::Frame& f, int id, const std::string& data, int min_px,
+                    emf::core::Frame* kept) {
   const auto pose = f.T_world_object_gt.find(id);
   if (f.instance_ids.empty() || pose == f.T_world_object_gt.end()) {
     throw emf::IoError(data + ": frame " + std::to_string(f.index) +
@@ -209,11 +210,11 @@ void keepObjectOnly(const emf::io::Frame& f, int id, const std::string& data, in
 
 /// --object: the volume the pipeline would create for the object from the first frame that
 /// shows it (its points in the object's frame, which is the "world" of these frames).
-void placeObjectVolume(const std::vector<emf::io::Frame>& frames, const emf::io::Intrinsics& k,
+void placeObjectVolume(const std::vector<emf::core::Frame>& frames, const emf::core::Intrinsics& k,
                        const emf::Config& config, emf::map::VolumeSpec* spec,
                        Eigen::Isometry3d* T_world_volume) {
   const auto first = std::find_if(frames.begin(), frames.end(),
-                                  [](const emf::io::Frame& f) { return !f.depth.empty(); });
+                                  [](const emf::core::Frame& f) { return !f.depth.empty(); });
   if (first == frames.end()) throw emf::IoError("--object: the object is in no frame");
   std::vector<Eigen::Vector3d> points;
   for (int v = 0; v < first->depth.rows; ++v) {
@@ -257,14 +258,14 @@ int main(int argc, char** argv) {
     for (const auto& assignment : args.sets) config.set(assignment);
     // Set once the first frame's size is known (objects.invisible_min_px is for 640x480).
     int min_object_px = 0;
-    const auto load = [&](const std::string& dir, emf::io::Intrinsics* k) {
+    const auto load = [&](const std::string& dir, emf::core::Intrinsics* k) {
       const bool is_uri = dir.rfind("synth:", 0) == 0;
-      auto source = emf::io::openSource(is_uri ? dir : "tum:" + dir, config.source);
+      auto source = emf::sources::openSource(is_uri ? dir : "tum:" + dir, config.source);
       *k = source->intrinsics();
       const double scale = k->width / 640.0;
       min_object_px = static_cast<int>(config.objects.invisible_min_px * scale * scale);
-      std::vector<emf::io::Frame> frames;
-      emf::io::Frame f;
+      std::vector<emf::core::Frame> frames;
+      emf::core::Frame f;
       while ((args.frames <= 0 || static_cast<int>(frames.size()) < args.frames) &&
              source->next(f)) {
         if (!f.T_world_camera_gt) {
@@ -272,7 +273,7 @@ int main(int argc, char** argv) {
                              " has no ground-truth pose (groundtruth.txt must cover every frame)");
         }
         // Only what the bench reads is kept (300 frames of 640x480 depth: 370 MB).
-        emf::io::Frame kept;
+        emf::core::Frame kept;
         kept.index = f.index;
         kept.timestamp = f.timestamp;
         kept.depth = f.depth.clone();
@@ -284,11 +285,11 @@ int main(int argc, char** argv) {
       if (args.reverse) std::reverse(frames.begin(), frames.end());
       return frames;
     };
-    emf::io::Intrinsics k;
-    const std::vector<emf::io::Frame> frames = load(args.data, &k);
-    std::vector<emf::io::Frame> tracked_frames;
+    emf::core::Intrinsics k;
+    const std::vector<emf::core::Frame> frames = load(args.data, &k);
+    std::vector<emf::core::Frame> tracked_frames;
     if (!args.track_data.empty()) {
-      emf::io::Intrinsics k2;
+      emf::core::Intrinsics k2;
       tracked_frames = load(args.track_data, &k2);
       if (k2.width != k.width || k2.height != k.height || tracked_frames.size() != frames.size()) {
         throw emf::IoError(args.track_data + ": not the same frame count and size as " + args.data);
@@ -300,7 +301,7 @@ int main(int argc, char** argv) {
         }
       }
     }
-    const std::vector<emf::io::Frame>& track_frames =
+    const std::vector<emf::core::Frame>& track_frames =
         tracked_frames.empty() ? frames : tracked_frames;
 
     emf::cl::Context ctx{config.cl};
@@ -434,7 +435,7 @@ int main(int argc, char** argv) {
     const double rms_mm = std::sqrt((stats.sq[0] + stats.sq[1] + stats.sq[2]) / stats.n);
     const double rms_deg = std::sqrt((stats.sq[3] + stats.sq[4] + stats.sq[5]) / stats.n);
     const double ate_mm =
-        stats.n >= 3 ? emf::io::computeAte(gt_track, est_track, 0.5).trans_m.rmse * 1000.0 : NAN;
+        stats.n >= 3 ? emf::eval::computeAte(gt_track, est_track, 0.5).trans_m.rmse * 1000.0 : NAN;
     std::printf("  per-frame error rms: %.3f mm, %.4f deg; ATE (rigidly aligned) %.3f mm\n", rms_mm,
                 rms_deg, ate_mm);
     std::printf(

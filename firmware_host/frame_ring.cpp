@@ -69,14 +69,15 @@ void checkImage(const cv::Mat& image, int width, int height, int type, const cha
 }  // namespace
 
 RingPolicy parseRingPolicy(const std::string& text) {
-  if (text == "drop_oldest") return RingPolicy::kDropOldest;
-  if (text == "block") return RingPolicy::kBlock;
+  for (const auto& [policy, name] : core::ringPolicyNames()) {
+    if (text == name) return policy;
+  }
   throw ConfigError("runtime.ring_policy: unknown policy '" + text +
                     "': use drop_oldest (live sensors) or block (replay, lossless)");
 }
 
 const char* ringPolicyName(RingPolicy policy) {
-  return policy == RingPolicy::kDropOldest ? "drop_oldest" : "block";
+  return choiceName(policy, core::ringPolicyNames());
 }
 
 FrameRing::FrameRing(const FrameRingOptions& options)
@@ -210,7 +211,7 @@ RingStatus FrameRing::commit() {
   return RingStatus::kOk;
 }
 
-RingStatus FrameRing::push(const io::Frame& frame) {
+RingStatus FrameRing::push(const core::Frame& frame) {
   checkImage(frame.depth, options_.depth_width, options_.depth_height, options_.depth_type,
              "depth");
   const bool has_color = !frame.color.empty();
@@ -264,7 +265,7 @@ void FrameRing::release() {
   read_slot_ = -1;
 }
 
-RingStatus FrameRing::pop(io::Frame& frame, double timeout_s) {
+RingStatus FrameRing::pop(core::Frame& frame, double timeout_s) {
   const FrameSlot* slot = nullptr;
   const RingStatus status = acquire(&slot, timeout_s);
   if (status != RingStatus::kOk) return status;

@@ -32,15 +32,13 @@
 #include <string>
 #include <vector>
 
-#include "io/frame.h"
+#include "core/frame.h"
+#include "core/ring_policy.h"
 
 namespace emf::fw {
 
-/// What the producer does when the ring is full.
-enum class RingPolicy {
-  kDropOldest,  // overwrite the oldest unread frame (live sensors: the newest frames win)
-  kBlock,       // wait for the consumer (replay: lossless), bounded by a timeout / stop()
-};
+/// What the producer does when the ring is full (core/ring_policy.h).
+using core::RingPolicy;
 
 /// Parses "drop_oldest" / "block" (the values of runtime.ring_policy). Throws ConfigError.
 RingPolicy parseRingPolicy(const std::string& text);
@@ -125,7 +123,7 @@ class FrameRing {
   RingStatus commit();
   /// Copies `frame` into the write slot and commits. Throws InvalidArgument (before touching
   /// the ring) when the images do not match the slot sizes/types chosen at start-up.
-  RingStatus push(const io::Frame& frame);
+  RingStatus push(const core::Frame& frame);
 
   // ---- consumer (one thread) -----------------------------------------------------------------
   /// Takes the oldest unread frame, waiting up to timeout_s (0 = do not wait). On kOk *slot
@@ -134,7 +132,7 @@ class FrameRing {
   /// Returns the slot taken by acquire() to the producer.
   void release();
   /// acquire() + copy into `frame` (index, timestamps, depth, color) + release().
-  RingStatus pop(io::Frame& frame, double timeout_s);
+  RingStatus pop(core::Frame& frame, double timeout_s);
 
   // ---- either thread -------------------------------------------------------------------------
   /// Wakes every wait with kStopped (now and later). Frames already in the ring can still be

@@ -38,7 +38,7 @@ void ReconnectingSource::close() {
   inner_.reset();
 }
 
-bool ReconnectingSource::next(io::Frame& frame) {
+bool ReconnectingSource::next(core::Frame& frame) {
   if (state() == SensorState::kEnded) return false;
   if (!inner_) {
     using Clock = std::chrono::steady_clock;

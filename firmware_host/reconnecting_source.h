@@ -19,7 +19,7 @@
 #include <memory>
 #include <string>
 
-#include "io/frame_source.h"
+#include "core/frame_source.h"
 
 namespace emf::fw {
 
@@ -33,16 +33,16 @@ struct ReconnectOptions {
   double reconnect_wait_s = 1.0;
 };
 
-class ReconnectingSource : public io::FrameSource {
+class ReconnectingSource : public core::FrameSource {
  public:
-  using Factory = std::function<std::unique_ptr<io::FrameSource>()>;
+  using Factory = std::function<std::unique_ptr<core::FrameSource>()>;
 
   /// Opens the sensor once through `factory` (errors propagate: a sensor that is missing at
   /// start-up is a configuration problem, not a hot-plug event).
   ReconnectingSource(Factory factory, std::string name, const ReconnectOptions& options = {});
 
-  io::Intrinsics intrinsics() const override { return intrinsics_; }
-  bool next(io::Frame& frame) override;
+  core::Intrinsics intrinsics() const override { return intrinsics_; }
+  bool next(core::Frame& frame) override;
   int64_t size() const override { return -1; }
   bool isLive() const override { return true; }
   /// Frames dropped by every sensor connection so far.
@@ -62,8 +62,8 @@ class ReconnectingSource : public io::FrameSource {
   Factory factory_;
   std::string name_;
   ReconnectOptions options_;
-  std::unique_ptr<io::FrameSource> inner_;
-  io::Intrinsics intrinsics_;
+  std::unique_ptr<core::FrameSource> inner_;
+  core::Intrinsics intrinsics_;
   std::string inner_description_;
   std::atomic<int> state_{static_cast<int>(SensorState::kStreaming)};
   std::string last_error_;

@@ -45,8 +45,8 @@ bool isSensorUri(const std::string& uri) {
   return uri.rfind("openni2:", 0) == 0 || uri.rfind("v4l2:", 0) == 0;
 }
 
-std::unique_ptr<io::FrameSource> openSensorSource(const std::string& uri,
-                                                  const io::SourceOptions& options) {
+std::unique_ptr<core::FrameSource> openSensorSource(const std::string& uri,
+                                                    const core::SourceOptions& options) {
   bool reconnect = true;
   const std::string inner_uri = stripReconnect(uri, &reconnect);
   (void)options;  // unused when no backend is compiled in
@@ -66,12 +66,12 @@ std::unique_ptr<io::FrameSource> openSensorSource(const std::string& uri,
   } else {
     throw IoError("'" + uri + "' is not a sensor URI (openni2:..., v4l2:...)");
   }
-  std::unique_ptr<io::FrameSource> source = factory();
+  std::unique_ptr<core::FrameSource> source = factory();
   if (!reconnect || !source->isLive()) return source;
   // The first open above proves the URI works; the wrapper re-opens it after an unplug.
-  auto first = std::make_shared<std::unique_ptr<io::FrameSource>>(std::move(source));
+  auto first = std::make_shared<std::unique_ptr<core::FrameSource>>(std::move(source));
   return std::make_unique<ReconnectingSource>(
-      [first, factory]() -> std::unique_ptr<io::FrameSource> {
+      [first, factory]() -> std::unique_ptr<core::FrameSource> {
         if (*first) return std::move(*first);
         return factory();
       },

@@ -1,10 +1,10 @@
-// Entry point of the live-sensor backends for io::openSource(): `openni2:` and `v4l2:` URIs.
+// Entry point of the live-sensor backends for sources::openSource(): `openni2:` and `v4l2:` URIs.
 #pragma once
 
 #include <memory>
 #include <string>
 
-#include "io/frame_source.h"
+#include "core/frame_source.h"
 
 namespace emf::fw {
 
@@ -16,7 +16,7 @@ bool isSensorUri(const std::string& uri);
 /// v4l2_source.h). Live devices are wrapped in a ReconnectingSource when `reconnect` is true
 /// (URI parameter `reconnect=0` disables it). Throws IoError for unknown schemes, backends not
 /// compiled in (naming the CMake option), and everything the backends report.
-std::unique_ptr<io::FrameSource> openSensorSource(const std::string& uri,
-                                                  const io::SourceOptions& options);
+std::unique_ptr<core::FrameSource> openSensorSource(const std::string& uri,
+                                                    const core::SourceOptions& options);
 
 }  // namespace emf::fw

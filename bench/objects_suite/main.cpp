@@ -21,14 +21,14 @@
 
 #include "bench_args.h"
 #include "cl/context.h"
-#include "common/config.h"
 #include "common/error.h"
 #include "common/log.h"
-#include "io/synth/scene.h"
-#include "io/synth/synth_source.h"
 #include "map/raycaster.h"
 #include "objects_suite/scoring.h"
+#include "pipeline/config.h"
 #include "pipeline/slam_system.h"
+#include "synth/scene.h"
+#include "synth/synth_source.h"
 
 namespace {
 
@@ -199,22 +199,22 @@ std::map<std::string, std::string> parseQuery(const std::string& q) {
 struct Runner {
   emf::pipeline::SlamSystem slam;
   // The estimates' masks for their labels: the map ray-cast at 320 px wide at most.
-  emf::io::Intrinsics label_k;
+  emf::core::Intrinsics label_k;
   emf::map::RayCaster label_caster;
   RunRecord record;
   std::map<int, size_t> est_index;  // estimated id -> index in record.est
 
-  static emf::io::Intrinsics labelIntrinsics(const emf::io::Intrinsics& k) {
+  static emf::core::Intrinsics labelIntrinsics(const emf::core::Intrinsics& k) {
     if (k.width <= 320) return k;
     return k.scaled(320, static_cast<int>(std::lround(k.height * 320.0 / k.width)));
   }
 
-  Runner(emf::cl::Context& ctx, const emf::Config& config, const emf::io::Intrinsics& k)
+  Runner(emf::cl::Context& ctx, const emf::Config& config, const emf::core::Intrinsics& k)
       : slam(ctx, config, k),
         label_k(labelIntrinsics(k)),
         label_caster(ctx, config.map, label_k.width, label_k.height) {}
 
-  void process(const emf::io::Frame& frame, size_t f) {
+  void process(const emf::core::Frame& frame, size_t f) {
     const auto t0 = std::chrono::steady_clock::now();
     const emf::pipeline::FrameOutcome out =
         slam.process(frame, frame.detections ? &*frame.detections : nullptr);
@@ -367,9 +367,9 @@ int main(int argc, char** argv) {
       q["frames"] = std::to_string(args.frames);
       q["width"] = std::to_string(args.width);
       q["height"] = std::to_string(args.height);
-      emf::io::synth::SynthSource source(
-          emf::io::synth::synthOptionsFromQuery("random", q, emf::io::SourceOptions{}));
-      const emf::io::synth::Scene& scene = source.scene();
+      emf::synth::SynthSource source(
+          emf::synth::synthOptionsFromQuery("random", q, emf::core::SourceOptions{}));
+      const emf::synth::Scene& scene = source.scene();
       std::vector<std::unique_ptr<Runner>> runners;
       for (const auto& v : configs) {
         runners.push_back(std::make_unique<Runner>(ctx, v.config, source.intrinsics()));
@@ -381,18 +381,18 @@ int main(int argc, char** argv) {
         g.id = o.id;
         g.class_name = o.class_name;
         g.motion = o.motion;
-        g.bounds = emf::io::synth::objectBounds(o);
+        g.bounds = emf::synth::objectBounds(o);
         gt.push_back(g);
       }
       std::vector<double> stamps;
       std::vector<Eigen::Isometry3d> cam_gt;
-      const int min_px = emf::io::synth::minVisiblePixels(args.width, args.height);
-      emf::io::Frame frame;
+      const int min_px = emf::synth::minVisiblePixels(args.width, args.height);
+      emf::core::Frame frame;
       size_t f = 0;
       while (source.next(frame)) {
         stamps.push_back(frame.timestamp);
         cam_gt.push_back(*frame.T_world_camera_gt);
-        const std::vector<int> counts = emf::io::synth::instancePixelCounts(frame.instance_ids);
+        const std::vector<int> counts = emf::synth::instancePixelCounts(frame.instance_ids);
         for (auto& g : gt) {
           g.T_world_object.push_back(frame.T_world_object_gt.at(g.id));
           const size_t id = static_cast<size_t>(g.id);

@@ -4,15 +4,15 @@
 #include <cmath>
 #include <map>
 
-#include "io/eval.h"
+#include "eval/eval.h"
 
 namespace emf::bench {
 namespace {
 
 std::optional<double> ate(const io::Trajectory& gt, const io::Trajectory& est) {
-  if (gt.size() < io::kMinAtePairs || est.size() < io::kMinAtePairs) return std::nullopt;
+  if (gt.size() < eval::kMinAtePairs || est.size() < eval::kMinAtePairs) return std::nullopt;
   try {
-    return io::computeAte(gt, est).trans_m.rmse;
+    return eval::computeAte(gt, est).trans_m.rmse;
   } catch (const std::exception&) {
     return std::nullopt;  // too few associated pairs
   }

@@ -181,7 +181,7 @@ std::vector<Openni2DeviceInfo> listOpenni2Devices() {
   return out;
 }
 
-Openni2Source::Openni2Source(const std::string& uri, const io::SourceOptions& options)
+Openni2Source::Openni2Source(const std::string& uri, const core::SourceOptions& options)
     : impl_(std::make_unique<Impl>()), uri_(uri) {
   SensorUri u(uri);
   if (u.scheme() != "openni2") {
@@ -384,7 +384,7 @@ void Openni2Source::close() {
   }
 }
 
-bool Openni2Source::next(io::Frame& frame) {
+bool Openni2Source::next(core::Frame& frame) {
   if (!impl_) throw IoError("openni2: source '" + uri_ + "' is closed");
   Impl& m = *impl_;
   if (max_frames_ > 0 && delivered_ >= max_frames_) return false;

@@ -24,7 +24,7 @@
 #include <string>
 #include <vector>
 
-#include "io/frame_source.h"
+#include "core/frame_source.h"
 
 namespace emf::fw {
 
@@ -44,19 +44,19 @@ std::vector<Openni2DeviceInfo> listOpenni2Devices();
 /// Folder OpenNI2 loads drivers from in this process (beside libOpenNI2), for messages.
 std::string openni2DriverFolder();
 
-class Openni2Source : public io::FrameSource {
+class Openni2Source : public core::FrameSource {
  public:
   /// Opens `uri` (openni2:...). Throws IoError naming the device and what to do when no device
   /// is found, the device cannot be opened, a stream cannot be created/started, a parameter is
   /// unknown or out of range.
-  Openni2Source(const std::string& uri, const io::SourceOptions& options);
+  Openni2Source(const std::string& uri, const core::SourceOptions& options);
   ~Openni2Source() override;
 
-  io::Intrinsics intrinsics() const override { return intrinsics_; }
+  core::Intrinsics intrinsics() const override { return intrinsics_; }
   /// Waits for the next depth frame (and the matching colour frame). Returns false after the
   /// last frame of a recording. Throws SensorDisconnected when the device is unplugged or sends
   /// no depth frame within timeout_s.
-  bool next(io::Frame& frame) override;
+  bool next(core::Frame& frame) override;
   int64_t size() const override { return num_frames_; }
   bool isLive() const override { return live_; }
   /// Live devices (the virtual one included): gaps in OpenNI2's depth frame numbers, i.e.
@@ -75,7 +75,7 @@ class Openni2Source : public io::FrameSource {
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
-  io::Intrinsics intrinsics_;
+  core::Intrinsics intrinsics_;
   std::string description_;
   std::string device_uri_;
   std::string uri_;

@@ -15,7 +15,7 @@
 
 namespace emf::fw {
 
-V4l2Source::V4l2Source(const std::string& uri, const io::SourceOptions& options)
+V4l2Source::V4l2Source(const std::string& uri, const core::SourceOptions& options)
     : pairer_(options.max_time_diff_s) {
   SensorUri u(uri);
   if (u.scheme() != "v4l2") throw IoError("'" + uri + "' is not a v4l2: URI");
@@ -77,7 +77,7 @@ void V4l2Source::close() {
   depth_.reset();
 }
 
-bool V4l2Source::next(io::Frame& frame) {
+bool V4l2Source::next(core::Frame& frame) {
   if (!depth_) throw IoError("v4l2: source is closed");
   if (max_frames_ > 0 && delivered_ >= max_frames_) return false;
   using Clock = std::chrono::steady_clock;

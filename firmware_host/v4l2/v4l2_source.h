@@ -16,23 +16,23 @@
 #include <memory>
 #include <string>
 
+#include "core/frame_source.h"
 #include "firmware_host/v4l2/frame_pairer.h"
 #include "firmware_host/v4l2/v4l2_device.h"
-#include "io/frame_source.h"
 
 namespace emf::fw {
 
-class V4l2Source : public io::FrameSource {
+class V4l2Source : public core::FrameSource {
  public:
   /// Opens and starts the node(s). Throws IoError naming the node and what to do (missing node,
   /// permissions, no depth format, missing intrinsics, bad parameter).
-  V4l2Source(const std::string& uri, const io::SourceOptions& options);
+  V4l2Source(const std::string& uri, const core::SourceOptions& options);
   ~V4l2Source() override;
 
-  io::Intrinsics intrinsics() const override { return intrinsics_; }
+  core::Intrinsics intrinsics() const override { return intrinsics_; }
   /// Next paired frame. Throws SensorDisconnected when the camera is gone or sends nothing for
   /// timeout_s.
-  bool next(io::Frame& frame) override;
+  bool next(core::Frame& frame) override;
   bool isLive() const override { return true; }
   /// Gaps in the driver's depth frame sequence numbers since the first frame.
   int64_t droppedFrames() const override { return dropped_; }
@@ -45,7 +45,7 @@ class V4l2Source : public io::FrameSource {
   std::unique_ptr<V4l2Device> depth_;
   std::unique_ptr<V4l2Device> color_;
   FramePairer pairer_;
-  io::Intrinsics intrinsics_;
+  core::Intrinsics intrinsics_;
   std::string description_;
   double depth_unit_m_ = 0.001;
   double timeout_s_ = 2.0;

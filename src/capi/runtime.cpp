@@ -10,8 +10,9 @@
 #include "capi/firewall.h"
 #include "capi/system_impl.h"
 #include "common/error.h"
+#include "core/frame_source.h"
 #include "emf/emf.h"
-#include "io/frame_source.h"
+#include "sources/open_source.h"
 
 namespace emf::capi {
 namespace {
@@ -21,7 +22,7 @@ namespace {
 class SystemProcessor : public runtime::FrameProcessor {
  public:
   explicit SystemProcessor(emf_system& system) : system_(system), slam_(*system.slam) {}
-  pipeline::FrameOutcome process(const io::Frame& frame) override {
+  pipeline::FrameOutcome process(const core::Frame& frame) override {
     pipeline::FrameOutcome o = system_.slam->process(frame);
     system_.last_objects = o.objects;
     system_.has_frame = true;
@@ -126,8 +127,9 @@ EMF_API emf_status emf_runtime_create(const emf_runtime_options* options, emf_ru
       return fail(EMF_ERROR_INVALID_ARGUMENT,
                   std::string(fn) + ": no source: set source_uri or the config's source.uri");
     }
-    std::unique_ptr<emf::io::FrameSource> source = emf::io::openSource(uri, sys.config.source);
-    const emf::io::Intrinsics k = source->intrinsics();
+    std::unique_ptr<emf::core::FrameSource> source =
+        emf::sources::openSource(uri, sys.config.source);
+    const emf::core::Intrinsics k = source->intrinsics();
     if (!k.valid()) {
       throw emf::IoError("source '" + uri +
                          "' reports no valid intrinsics: give them in the URI (?fx=..&fy=..&cx=.."

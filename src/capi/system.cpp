@@ -71,7 +71,7 @@ size_t checkImage(const emf_image& image, const char* name, int bytes_per_pixel,
 }
 
 /// The caller's depth as CV_32F metres, NaN = invalid.
-cv::Mat depthMetres(const emf_frame& f, const io::Intrinsics& k, const std::string& frame) {
+cv::Mat depthMetres(const emf_frame& f, const core::Intrinsics& k, const std::string& frame) {
   const emf_image& d = f.depth;
   if (d.struct_size >= sizeof(emf_image) && d.format != EMF_PIXEL_DEPTH_U16 &&
       d.format != EMF_PIXEL_DEPTH_F32) {
@@ -373,7 +373,7 @@ EMF_API emf_status emf_system_set_intrinsics(emf_system* system, const emf_intri
                       " height=" + std::to_string(k.height) +
                       ": focal lengths and the image size must be positive, all finite");
     }
-    emf::io::Intrinsics in;
+    emf::core::Intrinsics in;
     in.fx = k.fx;
     in.fy = k.fy;
     in.cx = k.cx;
@@ -418,7 +418,7 @@ EMF_API emf_status emf_system_process_frame(emf_system* system, const emf_frame*
                       std::to_string(system->last_timestamp) +
                       "): pass sensor timestamps in seconds, increasing");
     }
-    emf::io::Frame f;
+    emf::core::Frame f;
     f.index = system->slam->framesProcessed();
     f.timestamp = frame->timestamp;
     f.rgb_timestamp = frame->timestamp;
@@ -582,7 +582,7 @@ EMF_API emf_status emf_system_render(emf_system* system, const emf_pose* T_world
     if (!system) return fail(EMF_ERROR_INVALID_ARGUMENT, std::string(fn) + ": system is NULL");
     emf::capi::requireIdle(*system, fn);
     emf::capi::requireSlam(*system, fn);
-    const emf::io::Intrinsics& k = system->slam->intrinsics();
+    const emf::core::Intrinsics& k = system->slam->intrinsics();
     if (!system->raycaster) {
       system->raycaster =
           std::make_unique<emf::map::RayCaster>(*system->cl, system->config.map, k.width, k.height);

@@ -9,10 +9,10 @@
 #include <vector>
 
 #include "cl/context.h"
-#include "common/config.h"
+#include "core/frame.h"
 #include "emf/emf.h"
-#include "io/frame.h"
 #include "map/raycaster.h"
+#include "pipeline/config.h"
 #include "pipeline/slam_system.h"
 #include "runtime/runtime.h"
 

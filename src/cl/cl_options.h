@@ -7,13 +7,23 @@
 
 namespace emf::cl {
 
+enum class DeviceType { kAny, kCpu, kGpu, kAccelerator };
+/// The key texts, which are also the device types DeviceInfo::type names.
+inline const ChoiceNames<DeviceType>& deviceTypeNames() {
+  static const ChoiceNames<DeviceType> names = {{DeviceType::kAny, "any"},
+                                                {DeviceType::kCpu, "cpu"},
+                                                {DeviceType::kGpu, "gpu"},
+                                                {DeviceType::kAccelerator, "accelerator"}};
+  return names;
+}
+
 struct ClOptions {
   /// Substring of the platform name to prefer ("" = any), case-insensitive.
   std::string platform;
   /// Substring of the device name to prefer ("" = any), case-insensitive.
   std::string device;
   /// Device type to prefer.
-  std::string device_type = "any";
+  DeviceType device_type = DeviceType::kAny;
   /// Directory of the compiled-program cache ("" = $XDG_CACHE_HOME/emf/kernels or
   /// ~/.cache/emf/kernels).
   std::string cache_dir;
@@ -25,8 +35,7 @@ struct ClOptions {
   void bind(OptionBinder& b) {
     b.text("platform", platform, "platform name substring to prefer, case-insensitive");
     b.text("device", device, "device name substring to prefer, case-insensitive");
-    b.choice("device_type", device_type, {"any", "cpu", "gpu", "accelerator"},
-             "device type to prefer");
+    b.choice("device_type", device_type, deviceTypeNames(), "device type to prefer");
     b.text("cache_dir", cache_dir, "compiled-kernel cache folder");
     b.boolean("disable_cache", disable_cache, "always compile kernels from source");
     b.text("build_options", build_options, "extra clBuildProgram options");

@@ -130,16 +130,17 @@ DeviceSelection selectDevice(const ClOptions& options) {
   if (devices.empty()) {
     throw ClError(CL_DEVICE_NOT_FOUND, "no OpenCL device found: " + noDeviceAdvice());
   }
-  const bool has_preference =
-      !options.platform.empty() || !options.device.empty() || options.device_type != "any";
+  const std::string type = choiceName(options.device_type, deviceTypeNames());
+  const bool has_preference = !options.platform.empty() || !options.device.empty() ||
+                              options.device_type != DeviceType::kAny;
   for (const DeviceInfo& d : devices) {
     if (!contains(d.platform_name, options.platform)) continue;
     if (!contains(d.device_name, options.device)) continue;
-    if (options.device_type != "any" && d.type != options.device_type) continue;
+    if (options.device_type != DeviceType::kAny && d.type != type) continue;
     DeviceSelection s;
     s.device = d;
     s.reason = has_preference ? "matches cl.platform='" + options.platform + "' cl.device='" +
-                                    options.device + "' cl.device_type=" + options.device_type
+                                    options.device + "' cl.device_type=" + type
                               : "first device (no preference configured)";
     return s;
   }
@@ -170,7 +171,8 @@ DeviceSelection selectDevice(const ClOptions& options) {
   s.device = *pick;
   s.fallback = true;
   s.reason = "fallback to the " + kind + ": no device matches cl.platform='" + options.platform +
-             "' cl.device='" + options.device + "' cl.device_type=" + options.device_type;
+             "' cl.device='" + options.device +
+             "' cl.device_type=" + choiceName(options.device_type, deviceTypeNames());
   logWarning(s.reason);
   return s;
 }

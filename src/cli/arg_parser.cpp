@@ -3,7 +3,7 @@
 #include <cstdio>
 #include <sstream>
 
-#include "common/config.h"
+#include "pipeline/config.h"
 
 namespace emf::cli {
 

@@ -7,8 +7,8 @@
 #include "cli/arg_parser.h"
 #include "cli/commands.h"
 #include "common/error.h"
+#include "eval/eval.h"
 #include "io/atomic_output.h"
-#include "io/eval.h"
 
 namespace emf::cli {
 namespace {
@@ -51,7 +51,7 @@ int cmdEval(const std::vector<std::string>& args) {
     std::fprintf(stderr, "emf eval: --gt and --est are required\n\n%s", p.usage().c_str());
     return kExitUsage;
   }
-  io::EvalOptions options;
+  eval::EvalOptions options;
   options.max_diff_s = parseNumber(max_diff, "max-diff", false);
   options.rpe_delta_s = parseNumber(delta, "delta", false);
   options.min_object_coverage = parseNumber(min_coverage, "min-coverage", true);
@@ -60,8 +60,8 @@ int cmdEval(const std::vector<std::string>& args) {
                           min_coverage + "'");
   }
 
-  const io::EvalReport report = io::evaluatePaths(gt, est, options);
-  std::printf("%s", io::formatReport(report).c_str());
+  const eval::EvalReport report = eval::evaluatePaths(gt, est, options);
+  std::printf("%s", eval::formatReport(report).c_str());
 
   if (no_files) return kExitOk;
   if (out_dir.empty()) {
@@ -78,8 +78,8 @@ int cmdEval(const std::vector<std::string>& args) {
   if (ec) throw IoError("cannot create output folder '" + out_dir + "': " + ec.message());
   const std::string json_path = (std::filesystem::path(out_dir) / "eval.json").string();
   const std::string png_path = (std::filesystem::path(out_dir) / "eval.png").string();
-  io::writeFileAtomically(json_path, io::reportToJson(report).dump(2) + "\n");
-  io::writeEvalPlot(png_path, report);
+  io::writeFileAtomically(json_path, eval::reportToJson(report).dump(2) + "\n");
+  eval::writeEvalPlot(png_path, report);
   std::printf("wrote %s and %s\n", json_path.c_str(), png_path.c_str());
   return kExitOk;
 }

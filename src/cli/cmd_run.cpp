@@ -20,8 +20,8 @@
 #include "cli/run_viewer.h"
 #include "common/error.h"
 #include "common/log.h"
+#include "core/frame_source.h"
 #include "io/atomic_output.h"
-#include "io/frame_source.h"
 #include "io/trajectory_stream.h"
 #include "map/raycaster.h"
 #include "pipeline/detector_plugin.h"
@@ -31,6 +31,7 @@
 #include "pipeline/run_folder.h"
 #include "pipeline/run_outputs.h"
 #include "pipeline/slam_system.h"
+#include "sources/open_source.h"
 
 namespace emf::cli {
 
@@ -100,9 +101,9 @@ int cmdRun(const std::vector<std::string>& args) {
       "camera trajectory T_world_camera (emf run " + info.run_id + ", source " + source + ")");
 
   std::unique_ptr<cl::Context> ctx_ptr;
-  std::unique_ptr<io::FrameSource> src;
+  std::unique_ptr<core::FrameSource> src;
   std::unique_ptr<pipeline::SlamSystem> slam_ptr;
-  io::Intrinsics k, id_camera;
+  core::Intrinsics k, id_camera;
   // Images and the viewer: the object ids are ray cast here at each frame's estimated pose
   // (the viewer's at half the resolution, a quarter of the rays, shown scaled up; images/ at
   // full resolution); the association maps are those of the frame's last E-step.
@@ -110,7 +111,7 @@ int cmdRun(const std::vector<std::string>& args) {
   std::unique_ptr<RunViewer> viewer;
   try {
     ctx_ptr = std::make_unique<cl::Context>(config.cl);
-    src = io::openSource(source, config.source);
+    src = sources::openSource(source, config.source);
     info.source_description = src->describe();
     logInfo("source: ", src->describe(), "; device: ", ctx_ptr->device().device_name);
     slam_ptr = std::make_unique<pipeline::SlamSystem>(*ctx_ptr, config, src->intrinsics(), source);
@@ -162,7 +163,7 @@ int cmdRun(const std::vector<std::string>& args) {
     refreshSummary();
     io::writeFileAtomically(run_json, pipeline::runSummaryJson(slam, ctx, info));
   };
-  io::Frame frame;
+  core::Frame frame;
   int64_t n = 0;
   std::string last_written_stamp;
   try {

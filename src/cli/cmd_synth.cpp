@@ -14,9 +14,9 @@
 #include "cli/commands.h"
 #include "common/error.h"
 #include "emf/emf.h"
-#include "io/synth/presets.h"
-#include "io/synth/synth_source.h"
 #include "io/tum_writer.h"
+#include "synth/presets.h"
+#include "synth/synth_source.h"
 
 namespace emf::cli {
 namespace {
@@ -39,7 +39,7 @@ bool parseFlag(const ArgParser& p, const std::string& name, const std::string& t
 
 std::string presetList() {
   std::string s;
-  for (const auto& n : io::synth::presetNames()) s += (s.empty() ? "" : ", ") + n;
+  for (const auto& n : synth::presetNames()) s += (s.empty() ? "" : ", ") + n;
   return s;
 }
 
@@ -51,7 +51,7 @@ std::string joinNames(const std::vector<std::string>& names) {
 
 std::string partList() {
   std::string s;
-  for (const auto& n : io::synth::noisePartNames()) s += (s.empty() ? "" : ", ") + n;
+  for (const auto& n : synth::noisePartNames()) s += (s.empty() ? "" : ", ") + n;
   return s;
 }
 
@@ -81,11 +81,11 @@ int cmdSynth(const std::vector<std::string>& args) {
   p.option("still", &still, "N",
            "random only: still detected objects, 0-4 (default: from the seed, 0-3)");
   p.option("camera", &camera, "NAME",
-           "random only: camera family, " + joinNames(io::synth::cameraFamilyNames()) +
+           "random only: camera family, " + joinNames(synth::cameraFamilyNames()) +
                " (default: from the seed)");
   p.option("motions", &motions, "LIST",
            "random only: motion families the movers are drawn from, comma-separated: " +
-               joinNames(io::synth::motionFamilyNames()) + " (default: all)");
+               joinNames(synth::motionFamilyNames()) + " (default: all)");
   p.flag("no-noise", &no_noise, "exact depth and colour (no sensor noise)");
   p.option("noise-without", &noise_without, "LIST",
            "switch these parts of the depth noise model off (comma-separated: " + partList() +
@@ -98,7 +98,7 @@ int cmdSynth(const std::vector<std::string>& args) {
     std::fprintf(stderr, "emf synth: --out DIR is required\n\n%s", p.usage().c_str());
     return kExitUsage;
   }
-  const auto names = io::synth::presetNames();
+  const auto names = synth::presetNames();
   const bool random = preset == "random";
   if (!random && std::find(names.begin(), names.end(), preset) == names.end()) {
     std::fprintf(stderr,
@@ -114,7 +114,7 @@ int cmdSynth(const std::vector<std::string>& args) {
     return kExitUsage;
   }
 
-  io::synth::SynthOptions o;
+  synth::SynthOptions o;
   o.preset = preset;
   long long v = 0;
   if (!frames.empty()) {
@@ -150,7 +150,7 @@ int cmdSynth(const std::vector<std::string>& args) {
     o.random.still = static_cast<int>(v);
   }
   if (!camera.empty()) {
-    const auto& cams = io::synth::cameraFamilyNames();
+    const auto& cams = synth::cameraFamilyNames();
     if (std::find(cams.begin(), cams.end(), camera) == cams.end()) {
       std::fprintf(stderr, "emf synth: --camera %s: valid camera families are %s\n", camera.c_str(),
                    joinNames(cams).c_str());
@@ -161,7 +161,7 @@ int cmdSynth(const std::vector<std::string>& args) {
   if (!motions.empty()) {
     std::stringstream list(motions);
     std::string m;
-    const auto& fams = io::synth::motionFamilyNames();
+    const auto& fams = synth::motionFamilyNames();
     while (std::getline(list, m, ',')) {
       if (std::find(fams.begin(), fams.end(), m) == fams.end()) {
         std::fprintf(stderr, "emf synth: --motions %s: unknown family '%s': valid ones are %s\n",
@@ -182,7 +182,7 @@ int cmdSynth(const std::vector<std::string>& args) {
     std::stringstream list(noise_without);
     std::string part;
     while (std::getline(list, part, ',')) {
-      if (!io::synth::disableNoisePart(part, &o.depth_noise)) {
+      if (!synth::disableNoisePart(part, &o.depth_noise)) {
         std::fprintf(stderr,
                      "emf synth: --noise-without %s: unknown part '%s': valid parts are %s\n",
                      noise_without.c_str(), part.c_str(), partList().c_str());
@@ -208,7 +208,7 @@ int cmdSynth(const std::vector<std::string>& args) {
     }
   }
 
-  io::synth::SynthSource source(o);
+  synth::SynthSource source(o);
   std::string command =
       "emf synth " + preset + " --frames " + std::to_string(source.size()) + " --seed " +
       std::to_string(o.seed) + " --width " + std::to_string(o.width) + " --height " +
@@ -218,7 +218,7 @@ int cmdSynth(const std::vector<std::string>& args) {
       (movers.empty() ? "" : " --movers " + movers) + (still.empty() ? "" : " --still " + still) +
       (camera.empty() ? "" : " --camera " + camera) +
       (motions.empty() ? "" : " --motions " + motions);
-  const io::synth::DetectorSimOptions& det = source.detector();
+  const synth::DetectorSimOptions& det = source.detector();
   io::TumWriterOptions wo;
   wo.readme_about =
       "Synthetic sequence `" + preset + "` made by emf " + std::to_string(EMF_VERSION_MAJOR) + "." +
@@ -270,7 +270,7 @@ int cmdSynth(const std::vector<std::string>& args) {
   const auto t0 = std::chrono::steady_clock::now();
   const int64_t n = source.size();
   const int64_t step = std::max<int64_t>(1, n / 10);
-  io::Frame frame;
+  core::Frame frame;
   while (source.next(frame)) {
     writer.write(frame);
     const int64_t done = frame.index + 1;

@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "common/config.h"
+#include "pipeline/config.h"
 
 namespace emf::cli {
 

@@ -9,7 +9,7 @@
 #include "cli/arg_parser.h"
 #include "cli/commands.h"
 #include "cli/interrupt.h"
-#include "common/config.h"
+#include "pipeline/config.h"
 
 namespace {
 

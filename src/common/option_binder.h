@@ -12,9 +12,23 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace emf {
+
+/// The key text of each value of an enum option, e.g. {{Association::kEm, "em"}, ...}.
+template <typename E>
+using ChoiceNames = std::vector<std::pair<E, const char*>>;
+
+/// The key text of `value` ("?" if `names` lacks it): for messages and run.json.
+template <typename E>
+const char* choiceName(E value, const ChoiceNames<E>& names) {
+  for (const auto& [v, name] : names) {
+    if (v == value) return name;
+  }
+  return "?";
+}
 
 class OptionBinder {
  public:
@@ -33,6 +47,18 @@ class OptionBinder {
                       const char* doc) = 0;
   /// A list of strings (YAML sequence).
   virtual void textList(const char* key, std::vector<std::string>& value, const char* doc) = 0;
+
+  /// A choice stored as an enum: read and listed as the key texts of `names`, compared as enums.
+  template <typename E>
+  void choice(const char* key, E& value, const ChoiceNames<E>& names, const char* doc) {
+    std::string text = choiceName(value, names);
+    std::vector<std::string> texts;
+    for (const auto& entry : names) texts.push_back(entry.second);
+    choice(key, text, texts, doc);
+    for (const auto& [v, name] : names) {
+      if (text == name) value = v;
+    }
+  }
 
   /// Convenience for float members (stored and validated as double).
   void realf(const char* key, float& value, double lo, double hi, const char* unit,

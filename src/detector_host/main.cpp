@@ -58,7 +58,7 @@ struct Segment {
 
 void respond(Segment& seg, emf::pipeline::DetectorPlugin& plugin) {
   Header& h = seg.header();
-  emf::io::Frame frame;
+  emf::core::Frame frame;
   frame.index = h.frame_index;
   frame.timestamp = h.timestamp;
   frame.rgb_timestamp = h.rgb_timestamp;
@@ -82,7 +82,7 @@ void respond(Segment& seg, emf::pipeline::DetectorPlugin& plugin) {
   }
   const size_t mask_bytes = static_cast<size_t>(h.width) * h.height * sizeof(float);
   int count = 0;
-  for (const emf::io::Detection& d : out.detections) {
+  for (const emf::core::Detection& d : out.detections) {
     if (count == ipc::kMaxDetections) {
       ++h.rejected_count;  // the parent names the limit
       continue;
@@ -119,7 +119,7 @@ int main(int argc, char** argv) {
                  ipc::kChildShmFd);
     return 2;
   }
-  emf::io::Intrinsics k;
+  emf::core::Intrinsics k;
   k.fx = std::atof(argv[4]);
   k.fy = std::atof(argv[5]);
   k.cx = std::atof(argv[6]);

@@ -9,13 +9,20 @@
 
 namespace emf::em {
 
+enum class Association { kEm, kPfg };
+inline const ChoiceNames<Association>& associationNames() {
+  static const ChoiceNames<Association> names = {{Association::kEm, "em"},
+                                                 {Association::kPfg, "pfg"}};
+  return names;
+}
+
 struct EmOptions {
   double sigma_m = 0.02;
   double alpha = 0.8;
   double p_uniform = 1.0;
   double min_weight = 0.5;
   /// em: the E-step (docs/method.md#e-step); pfg: the paper's "w/o assoc." ablation (q_i = p_fg).
-  std::string association = "em";
+  Association association = Association::kEm;
 
   void bind(OptionBinder& b) {
     b.real("sigma_m", sigma_m, 1e-5, 1.0, "m", "Laplace scale of the SDF residual");
@@ -23,7 +30,7 @@ struct EmOptions {
     b.real("p_uniform", p_uniform, 0.0, 1e6, "", "uniform outlier likelihood p_U");
     b.real("min_weight", min_weight, 0.0, 128.0, "",
            "voxels with a lower TSDF weight count as unobserved in the E-step");
-    b.choice("association", association, {"em", "pfg"},
+    b.choice("association", association, associationNames(),
              "em = association likelihoods; pfg = foreground probability only (ablation)");
   }
 };

@@ -37,7 +37,7 @@ float associationLikelihood(const EStepHostVolume& volume, const Eigen::Vector3f
   const float truncation = volume.view.truncation_m;
   *abs_psi = (ok && weight >= static_cast<float>(options.min_weight)) ? std::fabs(psi) : truncation;
   const float pfg = volume.view.count_index ? map::samplePfgReference(volume.view, p) : 1.0f;
-  if (options.association == "pfg") return volume.view.count_index ? pfg : 1.0f;
+  if (options.association == Association::kPfg) return volume.view.count_index ? pfg : 1.0f;
   const float sigma = static_cast<float>(options.sigma_m);
   const float alpha = static_cast<float>(options.alpha);
   return alpha / (2.0f * sigma) * std::exp(-*abs_psi / sigma) * pfg +
@@ -66,7 +66,7 @@ std::vector<cv::Mat> eStepReference(const std::vector<EStepHostVolume>& volumes,
           res.at<float>(v, u) = lik[i] > 0.0f ? abs_psi : NAN;
         }
       }
-      if (options.association == "pfg") {
+      if (options.association == Association::kPfg) {
         float max_pfg = 0.0f;
         for (size_t i = 1; i < volumes.size(); ++i) max_pfg = std::max(max_pfg, lik[i]);
         for (size_t i = 0; i < volumes.size(); ++i) {
@@ -108,7 +108,7 @@ void EStep::compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes) 
                           " volumes, capacity " + std::to_string(q_.size()));
   }
   const int count = width_ * height_;
-  const cl_int pfg_mode = options_.association == "pfg" ? 1 : 0;
+  const cl_int pfg_mode = options_.association == Association::kPfg ? 1 : 0;
   for (size_t i = 0; i < volumes.size(); ++i) {
     const EStepVolume& v = volumes[i];
     const Eigen::Matrix<float, 3, 4> M = poseRows(v.T_volume_camera);

@@ -7,7 +7,7 @@
 
 namespace emf::em {
 
-DetectionUse detectionUse(const io::Detection& d, const ObjectOptions& options) {
+DetectionUse detectionUse(const core::Detection& d, const ObjectOptions& options) {
   if (d.box.width < options.min_detection_px || d.box.height < options.min_detection_px) {
     return DetectionUse::kTooSmall;
   }
@@ -142,7 +142,7 @@ double maskCoveredFraction(const cv::Mat& detection_mask, const cv::Mat& object_
   return static_cast<double>(cv::countNonZero(covered)) / total;
 }
 
-bool mayCreate(const io::Detection& d, const VolumePlacement& placement,
+bool mayCreate(const core::Detection& d, const VolumePlacement& placement,
                const Eigen::Vector3d& camera_position_world,
                const std::vector<OrientedBox>& existing_volumes, const cv::Mat& object_ids,
                const ObjectOptions& options, std::string* reason) {

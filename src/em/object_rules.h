@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "core/frame.h"
 #include "em/em_options.h"
-#include "io/frame.h"
 
 namespace emf::em {
 
@@ -20,7 +20,7 @@ enum class DetectionUse { kUse, kTooSmall, kPersonIgnored };
 /// Step 5, first bullet: detections whose box is narrower or lower than min_detection_px are
 /// dropped; "person" is dropped unless objects.track_person. (Excluded classes are kept here:
 /// they may still match existing objects but never create one, see mayCreate().)
-DetectionUse detectionUse(const io::Detection& d, const ObjectOptions& options);
+DetectionUse detectionUse(const core::Detection& d, const ObjectOptions& options);
 
 /// True if the class may create a new object (not on objects.exclude_classes).
 bool classMayCreate(const std::string& class_name, const ObjectOptions& options);
@@ -105,7 +105,7 @@ double objectTruncation(const ObjectOptions& options, double map_truncation_voxe
 /// the paper: a mask with fewer than objects.invisible_min_px visible pixels (maskVisiblePixels)
 /// creates nothing, since step 6 would delete the object as invisible in the next frame (a
 /// 40x40 box lying mostly in the border band passes the size filter).
-bool mayCreate(const io::Detection& d, const VolumePlacement& placement,
+bool mayCreate(const core::Detection& d, const VolumePlacement& placement,
                const Eigen::Vector3d& camera_position_world,
                const std::vector<OrientedBox>& existing_volumes, const cv::Mat& object_ids,
                const ObjectOptions& options, std::string* reason);

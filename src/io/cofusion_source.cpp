@@ -52,7 +52,8 @@ std::string sizeText(cv::Size s) {
 
 }  // namespace
 
-CoFusionSource::CoFusionSource(const std::string& dir, const SourceOptions& options, double fps)
+CoFusionSource::CoFusionSource(const std::string& dir, const core::SourceOptions& options,
+                               double fps)
     : dir_(dir), fps_(fps) {
   enableOpenExr();
   const fs::path root(dir);
@@ -133,10 +134,10 @@ cv::Mat CoFusionSource::readDepth(const std::string& path) const {
   return depth;
 }
 
-bool CoFusionSource::next(Frame& frame) {
+bool CoFusionSource::next(core::Frame& frame) {
   if (cursor_ >= frames_.size()) return false;
   const Entry& e = frames_[cursor_];
-  Frame f;
+  core::Frame f;
   f.index = static_cast<int64_t>(cursor_);
   f.timestamp = f.rgb_timestamp = static_cast<double>(e.number - frames_.front().number) / fps_;
   char text[64];

@@ -15,18 +15,18 @@
 #include <string>
 #include <vector>
 
-#include "io/frame_source.h"
+#include "core/frame_source.h"
 
 namespace emf::io {
 
-class CoFusionSource : public FrameSource {
+class CoFusionSource : public core::FrameSource {
  public:
   /// Indexes the folder and reads the first depth image (for the size). Throws IoError naming
   /// the file for a missing colour/depth partner, unreadable EXR, or missing intrinsics.
-  CoFusionSource(const std::string& dir, const SourceOptions& options, double fps = 30.0);
+  CoFusionSource(const std::string& dir, const core::SourceOptions& options, double fps = 30.0);
 
-  Intrinsics intrinsics() const override { return intrinsics_; }
-  bool next(Frame& frame) override;
+  core::Intrinsics intrinsics() const override { return intrinsics_; }
+  bool next(core::Frame& frame) override;
   int64_t size() const override { return static_cast<int64_t>(frames_.size()); }
   std::string describe() const override;
 
@@ -40,7 +40,7 @@ class CoFusionSource : public FrameSource {
   std::string dir_;
   double fps_;
   std::vector<Entry> frames_;
-  Intrinsics intrinsics_;
+  core::Intrinsics intrinsics_;
   cv::Size depth_size_;
   cv::Size color_size_;
   size_t cursor_ = 0;

@@ -12,8 +12,8 @@
 namespace emf::io {
 namespace fs = std::filesystem;
 
-std::vector<Detection> readDetectionFiles(const std::string& png_path, const std::string& txt_path,
-                                          cv::Size image_size) {
+std::vector<core::Detection> readDetectionFiles(const std::string& png_path,
+                                                const std::string& txt_path, cv::Size image_size) {
   // The list first: ids, classes, scores.
   struct Label {
     std::string class_name;
@@ -86,7 +86,7 @@ std::vector<Detection> readDetectionFiles(const std::string& png_path, const std
                     "' has no line for detection " + std::to_string(id));
     }
   }
-  std::vector<Detection> out;
+  std::vector<core::Detection> out;
   for (const auto& [id, label] : labels) {
     auto it = extents.find(id);
     if (it == extents.end()) {
@@ -94,7 +94,7 @@ std::vector<Detection> readDetectionFiles(const std::string& png_path, const std
                     " has no pixels in '" + png_path + "'");
     }
     const Extent& e = it->second;
-    Detection d;
+    core::Detection d;
     d.id = id;
     d.class_name = label.class_name;
     d.score = label.score;
@@ -106,9 +106,9 @@ std::vector<Detection> readDetectionFiles(const std::string& png_path, const std
   return out;
 }
 
-std::optional<std::vector<Detection>> readFrameDetections(const std::string& masks_dir,
-                                                          const std::string& timestamp_text,
-                                                          cv::Size image_size) {
+std::optional<std::vector<core::Detection>> readFrameDetections(const std::string& masks_dir,
+                                                                const std::string& timestamp_text,
+                                                                cv::Size image_size) {
   const std::string png = (fs::path(masks_dir) / (timestamp_text + ".png")).string();
   const std::string txt = (fs::path(masks_dir) / (timestamp_text + ".txt")).string();
   const bool has_png = fs::exists(png), has_txt = fs::exists(txt);

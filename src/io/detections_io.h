@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "io/frame.h"
+#include "core/frame.h"
 
 namespace emf::io {
 
@@ -23,14 +23,14 @@ namespace emf::io {
 /// a file is missing or unreadable, the PNG is not 16-bit single-channel or not `image_size`,
 /// a line is malformed, an id or score is invalid or duplicated, or the ids of the PNG and the
 /// text file differ.
-std::vector<Detection> readDetectionFiles(const std::string& png_path, const std::string& txt_path,
-                                          cv::Size image_size);
+std::vector<core::Detection> readDetectionFiles(const std::string& png_path,
+                                                const std::string& txt_path, cv::Size image_size);
 
 /// The detections of the frame with depth timestamp `timestamp_text` in `masks_dir`, or
 /// nullopt when neither `<timestamp>.png` nor `<timestamp>.txt` exists there (the frame was
 /// not labelled). One of the two files without the other is an error.
-std::optional<std::vector<Detection>> readFrameDetections(const std::string& masks_dir,
-                                                          const std::string& timestamp_text,
-                                                          cv::Size image_size);
+std::optional<std::vector<core::Detection>> readFrameDetections(const std::string& masks_dir,
+                                                                const std::string& timestamp_text,
+                                                                cv::Size image_size);
 
 }  // namespace emf::io

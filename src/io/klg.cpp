@@ -31,7 +31,7 @@ std::string sizeText(cv::Size s) {
 
 // ---- reader ---------------------------------------------------------------------------------
 
-KlgSource::KlgSource(const std::string& path, const SourceOptions& options, cv::Size size,
+KlgSource::KlgSource(const std::string& path, const core::SourceOptions& options, cv::Size size,
                      double depth_scale)
     : path_(path), size_(size), depth_scale_(depth_scale) {
   std::error_code ec;
@@ -106,7 +106,7 @@ void KlgSource::readExact(void* dst, size_t bytes, int64_t frame, const char* wh
   offset_ += bytes;
 }
 
-bool KlgSource::next(Frame& frame) {
+bool KlgSource::next(core::Frame& frame) {
   if (cursor_ >= frames_to_read_) return false;
   const int64_t i = cursor_;
   const uint64_t frame_offset = offset_;
@@ -155,7 +155,7 @@ bool KlgSource::next(Frame& frame) {
                     "); pass the right ?width=&height= or check the file");
     }
   }
-  Frame f;
+  core::Frame f;
   f.index = i;
   f.timestamp = f.rgb_timestamp = static_cast<double>(timestamp_us) * 1e-6;
   char text[64];
@@ -203,7 +203,7 @@ KlgWriter::KlgWriter(const std::string& path, double depth_scale, int jpeg_quali
   out_->write(&placeholder, sizeof(placeholder));
 }
 
-void KlgWriter::write(const Frame& frame) {
+void KlgWriter::write(const core::Frame& frame) {
   if (!out_) throw InvalidArgument("KlgWriter: write() after close()");
   const std::string which = "KlgWriter '" + out_->path() + "', frame " + std::to_string(frames_);
   if (frame.depth.empty() || frame.depth.type() != CV_32FC1) {

@@ -15,24 +15,24 @@
 #include <memory>
 #include <string>
 
+#include "core/frame_source.h"
 #include "io/atomic_output.h"
-#include "io/frame_source.h"
 
 namespace emf::io {
 
 /// KLG depth units per metre (millimetres).
 constexpr double kKlgDepthScale = 1000.0;
 
-class KlgSource : public FrameSource {
+class KlgSource : public core::FrameSource {
  public:
   /// Opens `path` and reads the header. `options` must carry fx, fy, cx, cy (IoError otherwise);
   /// `size` is the depth image size; `depth_scale` the depth units per metre.
-  KlgSource(const std::string& path, const SourceOptions& options, cv::Size size = {640, 480},
+  KlgSource(const std::string& path, const core::SourceOptions& options, cv::Size size = {640, 480},
             double depth_scale = kKlgDepthScale);
 
-  Intrinsics intrinsics() const override { return intrinsics_; }
+  core::Intrinsics intrinsics() const override { return intrinsics_; }
   /// Throws IoError naming the file, frame and byte offset for a truncated or corrupt frame.
-  bool next(Frame& frame) override;
+  bool next(core::Frame& frame) override;
   int64_t size() const override { return frames_to_read_; }
   std::string describe() const override;
 
@@ -52,7 +52,7 @@ class KlgSource : public FrameSource {
   int64_t last_timestamp_us_ = 0;
   cv::Size size_;
   double depth_scale_;
-  Intrinsics intrinsics_;
+  core::Intrinsics intrinsics_;
 };
 
 /// Writes a KLG log atomically: frames go to a temporary file, close() patches the frame count
@@ -68,7 +68,7 @@ class KlgWriter {
   /// metre become 0 = invalid, quantised to 1/depth_scale m), colour CV_8UC3 BGR or empty.
   /// Throws InvalidArgument for a wrong type, a size different from the first frame, or a
   /// timestamp not after the previous one; IoError on write errors.
-  void write(const Frame& frame);
+  void write(const core::Frame& frame);
   /// Patches the frame count and moves the file into place. Throws IoError.
   void close();
   int64_t framesWritten() const { return frames_; }

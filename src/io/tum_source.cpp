@@ -45,7 +45,7 @@ std::string sizeText(cv::Size s) {
 
 }  // namespace
 
-Intrinsics readCalibrationFile(const std::string& path) {
+core::Intrinsics readCalibrationFile(const std::string& path) {
   const auto rows = readTable(path);
   if (rows.empty()) throw IoError("'" + path + "' is empty; expected `fx fy cx cy [width height]`");
   const TableRow& row = rows.front();
@@ -57,7 +57,7 @@ Intrinsics readCalibrationFile(const std::string& path) {
     throw IoError(fileLine(path, row.line) + ": expected 4 or 6 fields (fx fy cx cy [width " +
                   "height]), got " + std::to_string(row.fields.size()));
   }
-  Intrinsics k;
+  core::Intrinsics k;
   k.fx = parseFinite(row.fields[0], path, row.line, "fx");
   k.fy = parseFinite(row.fields[1], path, row.line, "fy");
   k.cx = parseFinite(row.fields[2], path, row.line, "cx");
@@ -78,9 +78,10 @@ Intrinsics readCalibrationFile(const std::string& path) {
   return k;
 }
 
-Intrinsics resolveIntrinsics(const SourceOptions& options, const std::string& calibration_path,
-                             cv::Size size, const std::string& what) {
-  Intrinsics k;
+core::Intrinsics resolveIntrinsics(const core::SourceOptions& options,
+                                   const std::string& calibration_path, cv::Size size,
+                                   const std::string& what) {
+  core::Intrinsics k;
   const int given = (options.fx > 0) + (options.fy > 0) + (options.cx > 0) + (options.cy > 0);
   if (given == 4) {
     k.fx = options.fx;
@@ -117,7 +118,7 @@ Intrinsics resolveIntrinsics(const SourceOptions& options, const std::string& ca
   // URI or the configuration are checked (and named) when the SLAM starts.
   if (given == 0) {
     try {
-      checkedIntrinsics(k);
+      core::checkedIntrinsics(k);
     } catch (const InvalidArgument& e) {
       throw IoError(calibration_path + ": " + e.what());
     }
@@ -125,7 +126,7 @@ Intrinsics resolveIntrinsics(const SourceOptions& options, const std::string& ca
   return k;
 }
 
-TumSource::TumSource(const std::string& dir, const SourceOptions& options)
+TumSource::TumSource(const std::string& dir, const core::SourceOptions& options)
     : dir_(dir), options_(options) {
   if (!fs::is_directory(dir)) {
     throw IoError("TUM folder '" + dir + "' does not exist or is not a folder");
@@ -258,10 +259,10 @@ void TumSource::checkMasksMatchFrames() {
        "rename them after depth.txt's timestamps");
 }
 
-Frame TumSource::readFrame(size_t index) const {
+core::Frame TumSource::readFrame(size_t index) const {
   const TumEntry& e = entries_.at(index);
   const fs::path root(dir_);
-  Frame f;
+  core::Frame f;
   f.index = static_cast<int64_t>(index);
   f.timestamp = e.depth_stamp;
   f.timestamp_text = e.depth_stamp_text;
@@ -308,7 +309,7 @@ Frame TumSource::readFrame(size_t index) const {
   return f;
 }
 
-bool TumSource::next(Frame& frame) {
+bool TumSource::next(core::Frame& frame) {
   if (cursor_ >= entries_.size()) return false;
   frame = readFrame(cursor_);
   ++cursor_;
@@ -323,7 +324,7 @@ std::string TumSource::describe() const {
 
 // ---- tum-fr1-xyz-pairs ------------------------------------------------------------------------
 
-Intrinsics readIntrinsicMatrix(const std::string& path) {
+core::Intrinsics readIntrinsicMatrix(const std::string& path) {
   const auto rows = readTable(path);
   if (rows.size() != 3) {
     throw IoError("'" + path + "': expected a 3x3 intrinsic matrix on 3 lines, found " +
@@ -340,7 +341,7 @@ Intrinsics readIntrinsicMatrix(const std::string& path) {
       m[2][1] != 0) {
     throw IoError("'" + path + "': not an intrinsic matrix (expected fx 0 cx / 0 fy cy / 0 0 1)");
   }
-  Intrinsics k;
+  core::Intrinsics k;
   k.fx = m[0][0];
   k.fy = m[1][1];
   k.cx = m[0][2];
@@ -364,9 +365,9 @@ Eigen::Isometry3d readPoseFile(const std::string& path) {
   return *T;
 }
 
-Frame readPairFrame(const fs::path& dir, const std::string& tag, double depth_scale,
-                    int64_t index) {
-  Frame f;
+core::Frame readPairFrame(const fs::path& dir, const std::string& tag, double depth_scale,
+                          int64_t index) {
+  core::Frame f;
   f.index = index;
   f.timestamp = f.rgb_timestamp = static_cast<double>(index);
   f.timestamp_text = std::to_string(index);

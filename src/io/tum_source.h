@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "io/frame_source.h"
+#include "core/frame_source.h"
 #include "io/trajectory.h"
 
 namespace emf::io {
@@ -30,16 +30,16 @@ struct TumEntry {
   std::string color_origin;  // the same for the colour image ("" = origin: associations.txt)
 };
 
-class TumSource : public FrameSource {
+class TumSource : public core::FrameSource {
  public:
   /// Indexes the folder: reads the lists, the ground truth, the intrinsics and the first depth
   /// image (for the image size). Throws IoError naming file and line for anything missing or
   /// inconsistent, and when no intrinsics are available (neither options/query nor
   /// calibration.txt: TUM camera defaults are deliberately not guessed).
-  TumSource(const std::string& dir, const SourceOptions& options);
+  TumSource(const std::string& dir, const core::SourceOptions& options);
 
-  Intrinsics intrinsics() const override { return intrinsics_; }
-  bool next(Frame& frame) override;
+  core::Intrinsics intrinsics() const override { return intrinsics_; }
+  bool next(core::Frame& frame) override;
   int64_t size() const override { return static_cast<int64_t>(entries_.size()); }
   std::string describe() const override;
 
@@ -47,7 +47,7 @@ class TumSource : public FrameSource {
   /// The ground truth read from groundtruth.txt (empty when the folder has none).
   const Trajectory& groundTruth() const { return ground_truth_; }
   /// Reads frame `index` (0-based) without moving the cursor of next().
-  Frame readFrame(size_t index) const;
+  core::Frame readFrame(size_t index) const;
   /// What opening the folder warned about (also logged): a depth scale that looks wrong for the
   /// first depth image (see depthScaleWarning), detection lists in masks/ that match no frame.
   const std::vector<std::string>& openWarnings() const { return open_warnings_; }
@@ -57,10 +57,10 @@ class TumSource : public FrameSource {
   void checkMasksMatchFrames();
 
   std::string dir_;
-  SourceOptions options_;
+  core::SourceOptions options_;
   std::vector<TumEntry> entries_;
   Trajectory ground_truth_;
-  Intrinsics intrinsics_;
+  core::Intrinsics intrinsics_;
   std::string masks_dir_;  // empty when the folder has no masks/
   cv::Size depth_size_;
   std::string first_depth_file_;
@@ -75,8 +75,8 @@ class TumSource : public FrameSource {
 /// dep_curr.png (uint16, `depth_scale` units per metre) and pose_prev.txt / pose_curr.txt
 /// (`tx ty tz qx qy qz qw`, camera-to-world), plus a 3x3 intrinsic matrix file.
 struct TumPairCase {
-  Frame prev, curr;  // depth, colour and T_world_camera_gt filled; timestamps 0 and 1
-  Intrinsics intrinsics;
+  core::Frame prev, curr;  // depth, colour and T_world_camera_gt filled; timestamps 0 and 1
+  core::Intrinsics intrinsics;
   /// Ground-truth pose of the current camera in the previous camera's frame.
   Eigen::Isometry3d T_prev_curr() const;
 };
@@ -87,16 +87,17 @@ TumPairCase loadTumPairCase(const std::string& case_dir, const std::string& intr
 
 /// Reads a 3x3 intrinsic matrix (`fx 0 cx / 0 fy cy / 0 0 1`, spaces or tabs); width and height
 /// are left 0. Throws IoError naming file and line.
-Intrinsics readIntrinsicMatrix(const std::string& path);
+core::Intrinsics readIntrinsicMatrix(const std::string& path);
 
 /// Reads calibration.txt: `fx fy cx cy [width height]` on one line (width/height 0 when
 /// absent). Throws IoError naming file and line.
-Intrinsics readCalibrationFile(const std::string& path);
+core::Intrinsics readCalibrationFile(const std::string& path);
 
 /// Intrinsics for a source with image size `size`: from `options` (fx, fy, cx, cy all set) if
 /// given, else from `calibration_path` if it exists (its width/height must match `size`), else
 /// IoError telling the user to pass fx/fy/cx/cy. `what` names the source in messages.
-Intrinsics resolveIntrinsics(const SourceOptions& options, const std::string& calibration_path,
-                             cv::Size size, const std::string& what);
+core::Intrinsics resolveIntrinsics(const core::SourceOptions& options,
+                                   const std::string& calibration_path, cv::Size size,
+                                   const std::string& what);
 
 }  // namespace emf::io

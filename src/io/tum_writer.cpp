@@ -21,7 +21,7 @@ std::string formatTime(double t) {
   return s;
 }
 
-std::string frameName(const Frame& f) {
+std::string frameName(const core::Frame& f) {
   return "frame " + std::to_string(f.index) + " (t=" + f.timestamp_text + ")";
 }
 
@@ -56,7 +56,7 @@ std::string maskClassToken(const std::string& class_name) {
   return s;
 }
 
-TumWriter::TumWriter(const std::string& dir, const Intrinsics& intrinsics,
+TumWriter::TumWriter(const std::string& dir, const core::Intrinsics& intrinsics,
                      const TumWriterOptions& options)
     : dir_(dir), intrinsics_(intrinsics), options_(options) {
   if (!intrinsics.valid()) {
@@ -80,7 +80,7 @@ TumWriter::TumWriter(const std::string& dir, const Intrinsics& intrinsics,
       "# timestamp tx ty tz qx qy qz qw\n";
 }
 
-void TumWriter::write(const Frame& frame) {
+void TumWriter::write(const core::Frame& frame) {
   if (finished_) throw IoError("TUM writer for " + dir_ + ": write() after finish()");
   const std::string name = frameName(frame);
   if (frame.depth.empty() || frame.depth.type() != CV_32F) {
@@ -146,7 +146,7 @@ void TumWriter::write(const Frame& frame) {
   }
 
   if (frame.detections) {
-    std::vector<const Detection*> order;
+    std::vector<const core::Detection*> order;
     for (const auto& d : *frame.detections) {
       if (d.mask.size() != frame.depth.size() || d.mask.type() != CV_32F) {
         throw IoError("TUM writer for " + dir_ + ": " + name + " detection " +
@@ -159,10 +159,11 @@ void TumWriter::write(const Frame& frame) {
       order.push_back(&d);
     }
     // Where masks overlap the higher score wins: paint in ascending score.
-    std::stable_sort(order.begin(), order.end(),
-                     [](const Detection* a, const Detection* b) { return a->score < b->score; });
+    std::stable_sort(
+        order.begin(), order.end(),
+        [](const core::Detection* a, const core::Detection* b) { return a->score < b->score; });
     cv::Mat ids = cv::Mat::zeros(frame.depth.size(), CV_16U);
-    for (const Detection* d : order) ids.setTo(cv::Scalar(d->id), d->mask >= 0.5f);
+    for (const core::Detection* d : order) ids.setTo(cv::Scalar(d->id), d->mask >= 0.5f);
     // A detection hidden entirely under higher-scoring ones has no pixel left in the id image;
     // listing it would make the folder inconsistent (readers reject ids without pixels).
     std::vector<bool> present(65536, false);

@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "io/frame.h"
+#include "core/frame.h"
 
 namespace emf::io {
 
@@ -45,13 +45,13 @@ std::string maskClassToken(const std::string& class_name);
 class TumWriter {
  public:
   /// Creates `dir` (and parents) and its sub-folders. Throws IoError naming the folder.
-  TumWriter(const std::string& dir, const Intrinsics& intrinsics,
+  TumWriter(const std::string& dir, const core::Intrinsics& intrinsics,
             const TumWriterOptions& options = {});
 
   /// Writes the frame's images (and detection masks when frame.detections is set) and
   /// remembers its list lines and poses. Throws IoError naming the frame on bad images
   /// (depth must be CV_32F, colour CV_8UC3 of any size, detection masks of the depth size).
-  void write(const Frame& frame);
+  void write(const core::Frame& frame);
 
   /// Writes the lists, ground truth, calibration, object trajectories and README.md. Call
   /// once after the last frame; frames written after it are rejected.
@@ -62,7 +62,7 @@ class TumWriter {
 
  private:
   std::string dir_;
-  Intrinsics intrinsics_;
+  core::Intrinsics intrinsics_;
   TumWriterOptions options_;
   int64_t frames_ = 0;
   bool finished_ = false;

@@ -33,7 +33,7 @@ RayCaster::RayCaster(cl::Context& ctx, const MapOptions& options, int max_width,
   cast_ = ctx_.kernel("raycast", "raycast_volume");
 }
 
-void RayCaster::render(const std::vector<RenderItem>& volumes, const io::Intrinsics& k,
+void RayCaster::render(const std::vector<RenderItem>& volumes, const core::Intrinsics& k,
                        const Eigen::Isometry3d& T_world_camera) {
   if (!k.valid() || k.width > max_width_ || k.height > max_height_) {
     throw InvalidArgument("RayCaster::render: image " + std::to_string(k.width) + "x" +

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "cl/context.h"
-#include "io/frame.h"
+#include "core/frame.h"
 #include "map/map_options.h"
 #include "map/volume.h"
 
@@ -39,7 +39,7 @@ class RayCaster {
   RayCaster(cl::Context& ctx, const MapOptions& options, int max_width, int max_height);
 
   /// Renders `volumes` seen from T_world_camera with intrinsics k (<= the capacity).
-  void render(const std::vector<RenderItem>& volumes, const io::Intrinsics& k,
+  void render(const std::vector<RenderItem>& volumes, const core::Intrinsics& k,
               const Eigen::Isometry3d& T_world_camera);
 
   const cl::MemHandle& depth() const { return depth_; }

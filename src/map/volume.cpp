@@ -1,6 +1,7 @@
 #include "map/volume.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <map>
 #include <string>
@@ -77,8 +78,19 @@ int VolumeHostData::allocatedBlocks() const {
   return static_cast<int>(std::count_if(index.begin(), index.end(), [](int s) { return s >= 0; }));
 }
 
+namespace {
+uint64_t nextKey() {
+  static std::atomic<uint64_t> last{0};
+  return ++last;
+}
+}  // namespace
+
 Volume::Volume(VoxelPool& pool, const VolumeSpec& spec, const Eigen::Isometry3d& T_world_volume)
-    : pool_(pool), ctx_(pool.context()), spec_(spec), T_world_volume_(T_world_volume) {
+    : pool_(pool),
+      ctx_(pool.context()),
+      spec_(spec),
+      key_(nextKey()),
+      T_world_volume_(T_world_volume) {
   if ((spec.dims_blocks.array() < 1).any() ||
       static_cast<int64_t>(spec.dims_blocks.x()) * spec.dims_blocks.y() * spec.dims_blocks.z() >
           kMaxGridBlocks) {
@@ -145,7 +157,7 @@ void Volume::checkFrame(const IntegrationInput& frame, const char* what) const {
   if (!frame.depth || !frame.depth->get()) {
     throw InvalidArgument(std::string(what) + ": no depth image");
   }
-  const io::Intrinsics& k = frame.intrinsics;
+  const core::Intrinsics& k = frame.intrinsics;
   if (!k.valid()) {
     throw InvalidArgument(std::string(what) + ": invalid intrinsics " + std::to_string(k.width) +
                           "x" + std::to_string(k.height));
@@ -167,7 +179,7 @@ void Volume::checkFrame(const IntegrationInput& frame, const char* what) const {
 AllocationReport Volume::allocate(const IntegrationInput& frame) {
   checkFrame(frame, "Volume::allocate");
   const PoseRows T_volume_camera = PoseRows::from(T_world_volume_.inverse() * frame.T_world_camera);
-  const io::Intrinsics& k = frame.intrinsics;
+  const core::Intrinsics& k = frame.intrinsics;
   const cl_int4 dims = dimsBlocks();
   const cl_int w = k.width, h = k.height;
   cl::setArgs(mark_, *frame.depth, w, h, static_cast<cl_float>(k.fx), static_cast<cl_float>(k.fy),
@@ -199,7 +211,7 @@ void Volume::integrate(const IntegrationInput& frame) {
   checkFrame(frame, "Volume::integrate");
   if (last_report_.listed_blocks == 0) return;
   const PoseRows T_camera_volume = PoseRows::from(frame.T_world_camera.inverse() * T_world_volume_);
-  const io::Intrinsics& k = frame.intrinsics;
+  const core::Intrinsics& k = frame.intrinsics;
   const MapOptions& o = pool_.options();
   const size_t blocks = static_cast<size_t>(last_report_.listed_blocks);
   cl::setArgs(integrate_, block_list_, index_, dimsBlocks(), pool_.voxels(), *frame.depth,

@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "cl/context.h"
-#include "io/frame.h"
+#include "core/frame.h"
 #include "map/map_math.h"
 #include "map/map_options.h"
 #include "map/voxel_layout.h"
@@ -65,7 +65,7 @@ struct IntegrationInput {
   const cl::MemHandle* weights = nullptr;  // q(u) in [0, 1] per pixel, or nullptr = all ones
   const cl::MemHandle* fg_mask = nullptr;  // objects: p_fg of the matched detection per pixel
                                            // (NaN = occluded, no update), or nullptr
-  io::Intrinsics intrinsics;               // of depth (and of weights / fg_mask)
+  core::Intrinsics intrinsics;             // of depth (and of weights / fg_mask)
   Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();
 };
 
@@ -107,6 +107,9 @@ class Volume {
   static constexpr int kMaxGridBlocks = 1 << 27;
 
   const VolumeSpec& spec() const { return spec_; }
+  /// Names this volume for its lifetime, unique in the process (> 0): unlike index(), which
+  /// grow() replaces, it survives growth. State kept per volume across frames is keyed by it.
+  uint64_t key() const { return key_; }
   const Eigen::Isometry3d& T_world_volume() const { return T_world_volume_; }
   void setPose(const Eigen::Isometry3d& T_world_volume) { T_world_volume_ = T_world_volume; }
   /// The volume frame at creation, in the current volume frame: grow() moves the grid origin
@@ -154,6 +157,7 @@ class Volume {
   VoxelPool& pool_;
   cl::Context& ctx_;
   VolumeSpec spec_;
+  uint64_t key_;
   Eigen::Isometry3d T_world_volume_;
   Eigen::Isometry3d T_volume_initial_ = Eigen::Isometry3d::Identity();
   bool has_counts_buffer_ = false;

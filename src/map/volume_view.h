@@ -6,6 +6,7 @@
 #include <CL/cl.h>
 
 #include <Eigen/Core>
+#include <cstdint>
 
 namespace emf::map {
 
@@ -21,6 +22,9 @@ struct VolumeDeviceView {
   float voxel_size_m = 0.01f;
   /// TSDF truncation distance, metres (stored TSDF values are psi / truncation_m).
   float truncation_m = 0.1f;
+  /// The volume's Volume::key(): names it for state kept across frames (the tracker's
+  /// recovery), unchanged when the volume grows and `index` is replaced. 0: not from a Volume.
+  uint64_t volume_key = 0;
 };
 
 }  // namespace emf::map

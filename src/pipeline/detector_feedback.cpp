@@ -34,16 +34,14 @@ cv::Mat SlamSystem::backgroundSdf(const cv::Mat& vertex) {
 }
 
 void SlamSystem::detectorFeedback(cv::Mat* q0, cv::Mat* residual) {
-  if (estep_ids_.empty()) {  // no E-step this frame yet (no objects were tracked)
-    std::vector<Eigen::Isometry3d> T_oc;
-    for (const auto& o : objects_) {
-      T_oc.push_back(o.volume->T_world_volume().inverse() * T_world_camera_);
-    }
-    estep_.compute(objectVertexMap(), eStepVolumes(T_world_camera_, T_oc));
+  if (objects_->eStepIds().empty()) {  // no E-step this frame yet (no objects were tracked)
+    estep_.compute(
+        objects_->vertexMap(),
+        objects_->eStepVolumes(T_world_camera_, objects_->posesInCamera(T_world_camera_, false)));
   }
   *q0 = estep_.downloadQ(0);
   *residual = estep_.downloadResidual();
-  const cv::Mat sdf = backgroundSdf(downloadVertexMap());
+  const cv::Mat sdf = backgroundSdf(objects_->downloadVertexMap());
   // q_0 is normalised over the volumes only, so with the background alone it is 1 wherever the
   // background volume reaches. The detector gets what "explained by the background" means:
   // at most the posterior of the background's inlier term against the outlier term; and fully

@@ -76,7 +76,7 @@ std::unique_ptr<DetectorPlugin> DetectorPlugin::load(const std::string& name_or_
                                                      const std::vector<std::string>& search_path,
                                                      const std::string& config,
                                                      const std::string& source_uri,
-                                                     const io::Intrinsics& intrinsics) {
+                                                     const core::Intrinsics& intrinsics) {
   const std::string path = resolvePluginPath(name_or_path, search_path);
   std::unique_ptr<DetectorPlugin> p(new DetectorPlugin());
   p->path_ = path;
@@ -162,7 +162,8 @@ bool DetectorPlugin::readsFeedback() const {
   return (api_->flags & EMF_DETECTOR_FLAG_READS_FEEDBACK) != 0;
 }
 
-DetectorOutput DetectorPlugin::detect(const io::Frame& frame, const cv::Mat* background_association,
+DetectorOutput DetectorPlugin::detect(const core::Frame& frame,
+                                      const cv::Mat* background_association,
                                       const cv::Mat* residual) {
   DetectorOutput out;
   out.new_objects_only = newObjectsOnly();
@@ -257,7 +258,7 @@ DetectorOutput DetectorPlugin::detect(const io::Frame& frame, const cv::Mat* bac
       reject("neither mask nor mask_probability is set");
       continue;
     }
-    io::Detection det;
+    core::Detection det;
     det.id = static_cast<int>(out.detections.size()) + 1;
     det.class_name = d.class_name;
     det.score = d.score;

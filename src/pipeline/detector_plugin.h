@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "common/error.h"
+#include "core/frame.h"
 #include "emf/emf_detector.h"
-#include "io/frame.h"
 
 namespace emf::pipeline {
 
@@ -30,9 +30,9 @@ class PluginError : public Error {
 
 /// The outcome of one detect() call.
 struct DetectorOutput {
-  std::vector<io::Detection> detections;  // valid detections, ids 1..n in plugin order
-  std::vector<std::string> rejected;      // one message per dropped detection
-  std::string error;                      // non-empty when the call failed as a whole
+  std::vector<core::Detection> detections;  // valid detections, ids 1..n in plugin order
+  std::vector<std::string> rejected;        // one message per dropped detection
+  std::string error;                        // non-empty when the call failed as a whole
   /// The detector reports only what the SLAM does not explain yet
   /// (EMF_DETECTOR_FLAG_NEW_OBJECTS_ONLY): unmatched objects get no NonEx from this call.
   bool new_objects_only = false;
@@ -51,14 +51,14 @@ class DetectorPlugin {
                                               const std::vector<std::string>& search_path,
                                               const std::string& config,
                                               const std::string& source_uri,
-                                              const io::Intrinsics& intrinsics);
+                                              const core::Intrinsics& intrinsics);
   ~DetectorPlugin();
   DetectorPlugin(const DetectorPlugin&) = delete;
   DetectorPlugin& operator=(const DetectorPlugin&) = delete;
 
   /// Runs the plugin on `frame` (depth CV_32F metres, colour BGR). Optional SLAM feedback
   /// images (CV_32F, depth size) may be null. Never throws for plugin misbehaviour.
-  DetectorOutput detect(const io::Frame& frame, const cv::Mat* background_association = nullptr,
+  DetectorOutput detect(const core::Frame& frame, const cv::Mat* background_association = nullptr,
                         const cv::Mat* residual = nullptr);
 
   const std::string& name() const { return name_; }
@@ -79,7 +79,7 @@ class DetectorPlugin {
   const emf_detector_api* api_ = nullptr;
   emf_detector* instance_ = nullptr;
   std::string name_, path_;
-  io::Intrinsics intrinsics_;
+  core::Intrinsics intrinsics_;
   bool log_problems_ = true;
 };
 

@@ -34,12 +34,8 @@ void copyInto(const cv::Mat& src, cv::Mat* dst) {
 }  // namespace
 
 bool usesProcess(const DetectorOptions& options, const std::string& resolved_path) {
-  if (options.isolation == "process") return true;
-  if (options.isolation == "none") return false;
-  if (options.isolation != "auto") {
-    throw ConfigError("detector.isolation: '" + options.isolation +
-                      "' is not one of auto, process, none (set detector.isolation)");
-  }
+  if (options.isolation == DetectorIsolation::kProcess) return true;
+  if (options.isolation == DetectorIsolation::kNone) return false;
   std::error_code ec;
   const fs::path plugin = fs::weakly_canonical(resolved_path, ec);
   for (const std::string& folder : modulePluginFolders()) {
@@ -65,14 +61,14 @@ std::string problemKind(const std::string& message) {
 }
 
 DetectorScheduler::DetectorScheduler(const DetectorOptions& options, const std::string& source_uri,
-                                     const io::Intrinsics& intrinsics) {
+                                     const core::Intrinsics& intrinsics) {
   if (!options.plugin.empty() &&
       usesProcess(options, resolvePluginPath(options.plugin, pluginSearchPath(options)))) {
     isolated_ = std::make_unique<IsolatedDetector>(
         detectorHostPath(), resolvePluginPath(options.plugin, pluginSearchPath(options)),
         options.plugin_config, source_uri, intrinsics, options.deadline_s, kLoadTimeoutS);
     IsolatedDetector* isolated = isolated_.get();
-    detect_ = [isolated](const io::Frame& f, const cv::Mat* q0, const cv::Mat* residual) {
+    detect_ = [isolated](const core::Frame& f, const cv::Mat* q0, const cv::Mat* residual) {
       return isolated->detect(f, q0, residual);
     };
     name_ = isolated_->name();
@@ -82,7 +78,7 @@ DetectorScheduler::DetectorScheduler(const DetectorOptions& options, const std::
                                    source_uri, intrinsics);
     plugin_->setLogProblems(false);  // logged once per kind by recordProblem()
     DetectorPlugin* plugin = plugin_.get();
-    detect_ = [plugin](const io::Frame& f, const cv::Mat* q0, const cv::Mat* residual) {
+    detect_ = [plugin](const core::Frame& f, const cv::Mat* q0, const cv::Mat* residual) {
       return plugin->detect(f, q0, residual);
     };
     name_ = plugin_->name();
@@ -91,24 +87,20 @@ DetectorScheduler::DetectorScheduler(const DetectorOptions& options, const std::
 }
 
 DetectorScheduler::DetectorScheduler(const DetectorOptions& options, const std::string& name,
-                                     DetectFunction detect, const io::Intrinsics& intrinsics)
+                                     DetectFunction detect, const core::Intrinsics& intrinsics)
     : detect_(std::move(detect)), name_(name) {
   init(options, intrinsics);
 }
 
-void DetectorScheduler::init(const DetectorOptions& options, const io::Intrinsics& intrinsics) {
-  if (options.mode != "sequential" && options.mode != "async") {
-    throw ConfigError("detector.mode: '" + options.mode +
-                      "' is not one of sequential, async (set detector.mode)");
-  }
+void DetectorScheduler::init(const DetectorOptions& options, const core::Intrinsics& intrinsics) {
   if (options.every_n_frames < 1) {
     throw ConfigError("detector.every_n_frames: " + std::to_string(options.every_n_frames) +
                       " must be >= 1 (set detector.every_n_frames)");
   }
-  async_ = options.mode == "async";
+  async_ = options.mode == DetectorMode::kAsync;
   every_n_frames_ = options.every_n_frames;
   stats_.plugin = name_;
-  stats_.mode = options.mode;
+  stats_.mode = choiceName(options.mode, detectorModeNames());
   if (!enabled() || !async_) return;
   // Preallocate the hand-over slot at the camera's size (colour assumed registered to depth;
   // another colour size reallocates once on the first frame).
@@ -214,7 +206,7 @@ std::optional<DetectionBatch> DetectorScheduler::takeReady(int64_t current_index
   return out;
 }
 
-std::optional<DetectionBatch> DetectorScheduler::submit(const io::Frame& frame,
+std::optional<DetectionBatch> DetectorScheduler::submit(const core::Frame& frame,
                                                         const Eigen::Isometry3d& T_world_camera,
                                                         const cv::Mat* background_association,
                                                         const cv::Mat* residual,

@@ -18,7 +18,7 @@
 #include <thread>
 #include <vector>
 
-#include "io/frame.h"
+#include "core/frame.h"
 #include "pipeline/detector_plugin.h"
 #include "pipeline/isolated_detector.h"
 #include "pipeline/pipeline_options.h"
@@ -40,8 +40,8 @@ struct DetectionBatch {
   double timestamp = 0;        // its timestamp (seconds)
   std::string timestamp_text;  // its timestamp as the source wrote it
   Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();  // camera pose of that frame
-  std::vector<ObjectPose> objects;        // object poses of that frame (as given to submit())
-  std::vector<io::Detection> detections;  // valid detections (CV_32F masks in [0, 1])
+  std::vector<ObjectPose> objects;          // object poses of that frame (as given to submit())
+  std::vector<core::Detection> detections;  // valid detections (CV_32F masks in [0, 1])
   int64_t frames_late = 0;        // index of the submitting frame minus frame_index (0: sequential)
   double detector_ms = 0;         // wall time of the plugin's detect() call
   bool new_objects_only = false;  // DetectorOutput::new_objects_only of the call
@@ -82,7 +82,7 @@ class DetectorScheduler {
   /// The function that detects (for tests and embedders; the plugin host in normal use). Called
   /// from the detector thread in async mode. Must not throw; failures go into DetectorOutput.
   using DetectFunction = std::function<DetectorOutput(
-      const io::Frame& frame, const cv::Mat* background_association, const cv::Mat* residual)>;
+      const core::Frame& frame, const cv::Mat* background_association, const cv::Mat* residual)>;
 
   /// Loads options.plugin (a name looked up on pluginSearchPath(options) — detector.search_path,
   /// $EMF_PLUGIN_PATH, the build and install plugin folders — or a path), passing it
@@ -91,10 +91,10 @@ class DetectorScheduler {
   /// false). Throws PluginError (not found: lists the folders searched;
   /// cannot load/create: says why) and ConfigError for a bad mode / interval.
   DetectorScheduler(const DetectorOptions& options, const std::string& source_uri,
-                    const io::Intrinsics& intrinsics);
+                    const core::Intrinsics& intrinsics);
   /// A scheduler around `detect` (named `name` in messages and stats).
   DetectorScheduler(const DetectorOptions& options, const std::string& name, DetectFunction detect,
-                    const io::Intrinsics& intrinsics);
+                    const core::Intrinsics& intrinsics);
   /// Stops the detector thread after its current call (waits for that call to return).
   ~DetectorScheduler();
   DetectorScheduler(const DetectorScheduler&) = delete;
@@ -117,7 +117,7 @@ class DetectorScheduler {
   /// frame, so every result is returned before the next hand-over. Disabled: nullopt.
   /// Detections a source attaches to frames (io::Frame::detections) are never used here: the
   /// maskfile plugin replays them.
-  std::optional<DetectionBatch> submit(const io::Frame& frame,
+  std::optional<DetectionBatch> submit(const core::Frame& frame,
                                        const Eigen::Isometry3d& T_world_camera,
                                        const cv::Mat* background_association = nullptr,
                                        const cv::Mat* residual = nullptr,
@@ -138,14 +138,14 @@ class DetectorScheduler {
  private:
   // One frame handed to the detector thread, with buffers reused from frame to frame.
   struct Slot {
-    io::Frame frame;
+    core::Frame frame;
     cv::Mat background_association, residual;
     bool has_background_association = false, has_residual = false;
     Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();
     std::vector<ObjectPose> objects;
   };
 
-  void init(const DetectorOptions& options, const io::Intrinsics& intrinsics);
+  void init(const DetectorOptions& options, const core::Intrinsics& intrinsics);
   // Runs the detector on `slot` and fills `batch` (any thread); records stats under mutex_.
   void runDetector(const Slot& slot, DetectionBatch* batch);
   void recordProblem(const std::string& message);  // mutex_ held

@@ -89,7 +89,7 @@ std::string detectorHostPath() {
 
 IsolatedDetector::IsolatedDetector(std::string host_path, std::string plugin_path,
                                    std::string config, std::string source_uri,
-                                   const io::Intrinsics& intrinsics, double deadline_s,
+                                   const core::Intrinsics& intrinsics, double deadline_s,
                                    double load_timeout_s)
     : host_path_(std::move(host_path)),
       plugin_path_(std::move(plugin_path)),
@@ -255,7 +255,7 @@ std::string IsolatedDetector::reap(bool kill_first) {
   return r < 0 ? "not found" : describeStatus(status);
 }
 
-DetectorOutput IsolatedDetector::detect(const io::Frame& frame,
+DetectorOutput IsolatedDetector::detect(const core::Frame& frame,
                                         const cv::Mat* background_association,
                                         const cv::Mat* residual) {
   DetectorOutput out;
@@ -355,7 +355,7 @@ DetectorOutput IsolatedDetector::detect(const io::Frame& frame,
   const size_t mask_floats = static_cast<size_t>(w) * h;
   for (int i = 0; i < count; ++i) {
     const ipc::DetectionRecord& r = hdr->detections[i];
-    io::Detection d;
+    core::Detection d;
     d.id = r.id;
     d.score = r.score;
     d.box = cv::Rect(r.box_x, r.box_y, r.box_width, r.box_height);

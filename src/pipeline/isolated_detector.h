@@ -12,7 +12,7 @@
 #include <memory>
 #include <string>
 
-#include "io/frame.h"
+#include "core/frame.h"
 #include "pipeline/detector_plugin.h"
 
 namespace emf::pipeline {
@@ -34,7 +34,7 @@ class IsolatedDetector {
   /// load the plugin (up to `load_timeout_s`). Throws PluginError with the plugin's own load
   /// error, or naming the host when it cannot be started.
   IsolatedDetector(std::string host_path, std::string plugin_path, std::string config,
-                   std::string source_uri, const io::Intrinsics& intrinsics, double deadline_s,
+                   std::string source_uri, const core::Intrinsics& intrinsics, double deadline_s,
                    double load_timeout_s);
   ~IsolatedDetector();
   IsolatedDetector(const IsolatedDetector&) = delete;
@@ -42,7 +42,7 @@ class IsolatedDetector {
 
   /// Runs the plugin in the child on `frame`. Never throws for the child's faults: a crash, a
   /// timeout or a child that is down (restart pending) give an output with `error` set.
-  DetectorOutput detect(const io::Frame& frame, const cv::Mat* background_association = nullptr,
+  DetectorOutput detect(const core::Frame& frame, const cv::Mat* background_association = nullptr,
                         const cv::Mat* residual = nullptr);
 
   const std::string& name() const { return name_; }
@@ -66,7 +66,7 @@ class IsolatedDetector {
   bool receive(double timeout_s, void* message, bool* eof);
 
   std::string host_path_, plugin_path_, config_, source_uri_;
-  io::Intrinsics intrinsics_;
+  core::Intrinsics intrinsics_;
   double deadline_s_;
   std::string name_;
   bool new_objects_only_ = false, reads_feedback_ = true;

@@ -1,6 +1,5 @@
-// The object half of SlamSystem (docs/method.md#per-frame): E-step volumes, object tracking,
-// weighted integration of every volume, detection matching, creation, growth and deletion.
-// The rules themselves are the pure functions of em/object_rules.h.
+#include "pipeline/object_lifecycle.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -8,7 +7,6 @@
 #include <string>
 
 #include "common/log.h"
-#include "pipeline/slam_system.h"
 
 namespace emf::pipeline {
 
@@ -50,20 +48,114 @@ std::vector<Eigen::Vector3d> maskedPoints(const cv::Mat& vertex, const cv::Mat& 
 
 }  // namespace
 
-cv::Mat SlamSystem::downloadVertexMap() const {
+map::VolumeDeviceView deviceView(const map::Volume& volume) {
+  map::VolumeDeviceView v;
+  v.index = volume.index().get();
+  v.dims_blocks = volume.spec().dims_blocks;
+  v.voxels = volume.pool().voxels().get();
+  v.voxel_size_m = volume.spec().voxel_size_m;
+  v.truncation_m = volume.spec().truncation_m;
+  v.volume_key = volume.key();
+  return v;
+}
+
+const char* objectStateName(ObjectState state) {
+  switch (state) {
+    case ObjectState::kTracked:
+      return "tracked";
+    case ObjectState::kLost:
+      return "lost";
+    case ObjectState::kInvisible:
+      return "invisible";
+    case ObjectState::kDeleted:
+      return "deleted";
+    case ObjectState::kDormant:
+      return "dormant";
+  }
+  return "?";
+}
+
+ObjectLifecycle::ObjectLifecycle(cl::Context& ctx, const Config& config,
+                                 const core::Intrinsics& intrinsics, map::VoxelPool& pool,
+                                 const map::Volume& background,
+                                 const track::Preprocessor& camera_preprocessor, em::EStep& estep,
+                                 StageTimer& timer, FrameCounters& counters)
+    : ctx_(ctx),
+      config_(config),
+      settings_(deriveObjectSettings(config, intrinsics)),
+      intrinsics_(intrinsics),
+      pool_(pool),
+      background_(background),
+      camera_preprocessor_(camera_preprocessor),
+      estep_(estep),
+      timer_(timer),
+      counters_(counters),
+      object_preprocessor_(ctx, settings_.preprocess, intrinsics),
+      object_tracker_(ctx, settings_.track, intrinsics.width, intrinsics.height),
+      reid_tracker_(ctx, settings_.reid_track, intrinsics.width, intrinsics.height),
+      raycaster_(ctx, config.map, intrinsics.width, intrinsics.height) {
+  config_.objects = settings_.rules;
+  const size_t image_bytes = sizeof(float) * static_cast<size_t>(intrinsics.width) *
+                             static_cast<size_t>(intrinsics.height);
+  fg_mask_ = ctx.buffer(CL_MEM_READ_ONLY, image_bytes);
+  new_weights_ = ctx.buffer(CL_MEM_READ_ONLY, image_bytes);
+  reid_q_ = ctx.buffer(CL_MEM_READ_ONLY, image_bytes);
+}
+
+void ObjectLifecycle::beginFrame(int64_t index, double timestamp) {
+  frames_ = index;
+  frame_timestamp_ = timestamp;
+  pending_fg_.clear();
+  estep_ids_.clear();
+  unmatched_.clear();
+  created_mask_.release();
+  deleted_now_.clear();
+  confirmed_now_.clear();
+}
+
+void ObjectLifecycle::preprocess(const cv::Mat& depth, float frame_max_m) {
+  if (!config_.objects.filter_depth) object_preprocessor_.process(depth, frame_max_m);
+}
+
+cl_mem ObjectLifecycle::vertexMap() const {
+  return config_.objects.filter_depth ? camera_preprocessor_.vertexMap().get()
+                                      : object_preprocessor_.vertexMap().get();
+}
+
+std::vector<Eigen::Isometry3d> ObjectLifecycle::posesInCamera(
+    const Eigen::Isometry3d& T_world_camera, bool predicted) const {
+  std::vector<Eigen::Isometry3d> T_oc;
+  for (const auto& o : objects_) {
+    T_oc.push_back(o.volume->T_world_volume().inverse() * T_world_camera *
+                   (predicted ? o.last_motion : Eigen::Isometry3d::Identity()));
+  }
+  return T_oc;
+}
+
+void ObjectLifecycle::setCamera(const Eigen::Isometry3d& T_world_camera,
+                                const Eigen::Isometry3d& last_motion) {
+  T_world_camera_ = T_world_camera;
+  last_motion_ = last_motion;
+}
+
+void ObjectLifecycle::markAllLost() {
+  for (auto& o : objects_) o.state = ObjectState::kLost;
+}
+
+cv::Mat ObjectLifecycle::downloadVertexMap() const {
   cv::Mat vertex(intrinsics_.height, intrinsics_.width, CV_32FC4);
-  ctx_.read(
-      config_.objects.filter_depth ? preprocessor_.vertexMap() : object_preprocessor_.vertexMap(),
-      vertex.data, vertex.total() * sizeof(cv::Vec4f));
+  ctx_.read(config_.objects.filter_depth ? camera_preprocessor_.vertexMap()
+                                         : object_preprocessor_.vertexMap(),
+            vertex.data, vertex.total() * sizeof(cv::Vec4f));
   return vertex;
 }
 
-std::vector<em::EStepVolume> SlamSystem::eStepVolumes(const Eigen::Isometry3d& T_world_camera,
-                                                      const std::vector<Eigen::Isometry3d>& T_oc) {
+std::vector<em::EStepVolume> ObjectLifecycle::eStepVolumes(
+    const Eigen::Isometry3d& T_world_camera, const std::vector<Eigen::Isometry3d>& T_oc) {
   std::vector<em::EStepVolume> volumes;
-  volumes.push_back({deviceView(*background_),
+  volumes.push_back({deviceView(background_),
                      nullptr,
-                     background_->T_world_volume().inverse() * T_world_camera,
+                     background_.T_world_volume().inverse() * T_world_camera,
                      {}});
   estep_ids_ = {0};
   for (size_t k = 0; k < objects_.size(); ++k) {
@@ -86,8 +178,8 @@ std::vector<em::EStepVolume> SlamSystem::eStepVolumes(const Eigen::Isometry3d& T
   return volumes;
 }
 
-void SlamSystem::trackObjects(const std::vector<Eigen::Isometry3d>& T_oc_predicted) {
-  const cl_mem vertex = objectVertexMap();
+void ObjectLifecycle::track(const std::vector<Eigen::Isometry3d>& T_oc_predicted) {
+  const cl_mem vertex = vertexMap();
   {
     ScopedStage s(timer_, "estep");  // E-step again with the tracked camera pose
     estep_.compute(vertex, eStepVolumes(T_world_camera_, T_oc_predicted));
@@ -140,33 +232,19 @@ void SlamSystem::trackObjects(const std::vector<Eigen::Isometry3d>& T_oc_predict
   }
 }
 
-void SlamSystem::integrateAll() {
+const cl::MemHandle* ObjectLifecycle::backgroundWeights() {
   const bool have_q = estep_ids_.size() > 1;  // q of this frame's E-step with the objects
-  map::IntegrationInput in;
-  in.depth = &preprocessor_.inputDepth();  // raw depth (metres, NaN invalid)
-  in.intrinsics = intrinsics_;
-  in.T_world_camera = T_world_camera_;
-  in.weights = have_q ? &estep_.q(0) : nullptr;
-  if (!created_mask_.empty()) {
-    // Objects created this frame: the background does not take their pixels.
-    cv::Mat w =
-        have_q ? estep_.downloadQ(0) : cv::Mat(intrinsics_.height, intrinsics_.width, CV_32F, 1.0f);
-    w = w.mul(1.0f - created_mask_);
-    ctx_.write(new_weights_, w.data, w.total() * sizeof(float));
-    in.weights = &new_weights_;
-  }
-  const map::AllocationReport background = background_->fuse(in);
-  counters_.add("integrated_blocks", background.listed_blocks);
-  if (background.dropped_blocks > 0) {
-    // Logged the first time and every 100th frame: a full pool is a state, not an event.
-    if (background_pool_full_frames_++ % 100 == 0) {
-      logWarning("frame ", frames_, ": voxel pool full: ", background.dropped_blocks,
-                 " background blocks found no slot (", background_pool_full_frames_,
-                 " frame(s) so far); the map is incomplete and tracking may drift: raise "
-                 "map.memory_mb (",
-                 config_.map.memory_mb, " MiB) or coarsen map.background_voxel_m");
-    }
-  }
+  if (created_mask_.empty()) return have_q ? &estep_.q(0) : nullptr;
+  // Objects created this frame: the background does not take their pixels.
+  cv::Mat w =
+      have_q ? estep_.downloadQ(0) : cv::Mat(intrinsics_.height, intrinsics_.width, CV_32F, 1.0f);
+  w = w.mul(1.0f - created_mask_);
+  ctx_.write(new_weights_, w.data, w.total() * sizeof(float));
+  return &new_weights_;
+}
+
+void ObjectLifecycle::integrate(const map::IntegrationInput& in) {
+  const bool have_q = estep_ids_.size() > 1;
   for (TrackedObject& o : objects_) {
     if (o.state != ObjectState::kTracked || !have_q || o.first_frame == frames_ ||
         o.reattached_frame == frames_) {
@@ -189,10 +267,11 @@ void SlamSystem::integrateAll() {
   }
 }
 
-void SlamSystem::matchDetections(const DetectionBatch& batch, FrameOutcome* out) {
-  const std::vector<io::Detection>& detections = batch.detections;
+int ObjectLifecycle::matchDetections(const DetectionBatch& batch,
+                                     std::vector<DetectionMatch>* matches) {
+  const std::vector<core::Detection>& detections = batch.detections;
   const em::ObjectOptions& opt = config_.objects;
-  std::vector<const io::Detection*> usable;
+  std::vector<const core::Detection*> usable;
   for (const auto& d : detections) {
     if (d.mask.size() != cv::Size(intrinsics_.width, intrinsics_.height) ||
         d.mask.type() != CV_32F) {
@@ -202,8 +281,6 @@ void SlamSystem::matchDetections(const DetectionBatch& batch, FrameOutcome* out)
     }
     if (em::detectionUse(d, opt) == em::DetectionUse::kUse) usable.push_back(&d);
   }
-  out->detector_ran = true;
-  out->detections = static_cast<int>(usable.size());
   new_objects_only_ = batch.new_objects_only;
 
   // Ray-cast object masks (the background occludes) at the poses of the frame the detector ran
@@ -215,7 +292,7 @@ void SlamSystem::matchDetections(const DetectionBatch& batch, FrameOutcome* out)
   std::vector<Eigen::Isometry3d> current_poses;
   if (!objects_.empty()) {
     std::vector<map::RenderItem> items;
-    items.push_back({background_.get(), 0, 0.0f});
+    items.push_back({&background_, 0, 0.0f});
     for (auto& o : objects_) {
       current_poses.push_back(o.volume->T_world_volume());
       if (late) {
@@ -274,11 +351,11 @@ void SlamSystem::matchDetections(const DetectionBatch& batch, FrameOutcome* out)
         m.best_object = objects_[k].id;
       }
     }
-    out->matches.push_back(m);
+    matches->push_back(m);
   }
   std::vector<bool> matched(objects_.size(), false);
   for (size_t i = 0; i < usable.size(); ++i) {
-    const io::Detection& d = *usable[i];
+    const core::Detection& d = *usable[i];
     if (match[i] < 0) {
       unmatched_.push_back(d);
       continue;
@@ -343,13 +420,14 @@ void SlamSystem::matchDetections(const DetectionBatch& batch, FrameOutcome* out)
       }
     }
   }
+  return static_cast<int>(usable.size());
 }
 
-void SlamSystem::createObjects() {
+void ObjectLifecycle::createObjects() {
   if (unmatched_.empty()) return;
   const cv::Mat vertex = downloadVertexMap();
-  for (const io::Detection& detected : unmatched_) {
-    io::Detection d = detected;  // the part of the mask the object is built from
+  for (const core::Detection& detected : unmatched_) {
+    core::Detection d = detected;  // the part of the mask the object is built from
     d.mask = em::creationMask(detected.mask, vertex, config_.objects);
     // A lost or dormant object this detection fits is the same object: re-attach it.
     if (!objects_.empty() || !dormant_.empty()) {
@@ -361,7 +439,7 @@ void SlamSystem::createObjects() {
   }
 }
 
-void SlamSystem::deleteByExistence() {
+void ObjectLifecycle::deleteByExistence() {
   const em::ObjectOptions& opt = config_.objects;
   for (size_t k = objects_.size(); k-- > 0;) {
     if (objects_[k].first_frame == frames_) continue;  // created this frame
@@ -374,7 +452,7 @@ void SlamSystem::deleteByExistence() {
   }
 }
 
-bool SlamSystem::createObject(const io::Detection& d, const cv::Mat& vertex) {
+bool ObjectLifecycle::createObject(const core::Detection& d, const cv::Mat& vertex) {
   const em::ObjectOptions& opt = config_.objects;
   if (static_cast<int>(objects_.size()) >= opt.max_objects) {
     logInfo("frame ", frames_, ": no object created for '", d.class_name, "': ", opt.max_objects,
@@ -407,7 +485,7 @@ bool SlamSystem::createObject(const io::Detection& d, const cv::Mat& vertex) {
   TrackedObject o;
   o.class_name = d.class_name;
   o.rendered = d.class_name != "person";
-  o.volume = std::make_unique<map::Volume>(*pool_, spec, T_world_volume);
+  o.volume = std::make_unique<map::Volume>(pool_, spec, T_world_volume);
   o.last_motion = last_motion_;  // at first assumed still in the world
   o.first_frame = o.last_frame = frames_;
   // A detector of new things only (motion) never reports its objects again: nothing to confirm.
@@ -426,7 +504,7 @@ bool SlamSystem::createObject(const io::Detection& d, const cv::Mat& vertex) {
   ctx_.write(new_weights_, mask.data, mask.total() * sizeof(float));
   ctx_.write(fg_mask_, mask.data, mask.total() * sizeof(float));
   map::IntegrationInput in;
-  in.depth = &preprocessor_.inputDepth();
+  in.depth = &camera_preprocessor_.inputDepth();
   in.intrinsics = intrinsics_;
   in.T_world_camera = T_world_camera_;
   in.weights = &new_weights_;
@@ -435,7 +513,7 @@ bool SlamSystem::createObject(const io::Detection& d, const cv::Mat& vertex) {
   counters_.add("integrated_blocks", r.listed_blocks);
   // A fixed pool: an object that would crowd out the background (or got no slot at all) is not
   // created; its volume and blocks go back to the pool here.
-  const map::PoolStats pool = pool_->stats();
+  const map::PoolStats pool = pool_.stats();
   const double free_fraction =
       pool.capacity_slots > 0 ? static_cast<double>(pool.free_slots) / pool.capacity_slots : 0.0;
   if (r.allocated_blocks == 0 || free_fraction < opt.min_free_pool_fraction) {
@@ -461,20 +539,21 @@ bool SlamSystem::createObject(const io::Detection& d, const cv::Mat& vertex) {
   return true;
 }
 
-void SlamSystem::checkVisibility(const cv::Mat& depth) {
-  const em::ObjectOptions& opt = visibility_options_;  // thresholds at the ray cast's size
+void ObjectLifecycle::checkVisibility(const cv::Mat& depth) {
+  const em::ObjectOptions& opt = settings_.visibility_rules;  // thresholds at the cast's size
   // Each object is ray-cast alone at objects.visibility_width (q and the depth are brought to
   // that size): its own mask says whether it is in view, and the measured depth in front of it
   // whether it is hidden.
-  const bool scaled = visibility_k_.width != intrinsics_.width;
-  const std::string at = scaled ? " (ray cast at " + std::to_string(visibility_k_.width) + "x" +
-                                      std::to_string(visibility_k_.height) + ")"
+  const bool scaled = settings_.visibility_k.width != intrinsics_.width;
+  const std::string at = scaled ? " (ray cast at " + std::to_string(settings_.visibility_k.width) +
+                                      "x" + std::to_string(settings_.visibility_k.height) + ")"
                                 : std::string();
   // The images live in members: their buffers are reused from frame to frame.
   const cv::Mat* measured = &depth;
   if (scaled) {
-    cv::resize(depth, visibility_measured_, cv::Size(visibility_k_.width, visibility_k_.height), 0,
-               0, cv::INTER_NEAREST);
+    cv::resize(depth, visibility_measured_,
+               cv::Size(settings_.visibility_k.width, settings_.visibility_k.height), 0, 0,
+               cv::INTER_NEAREST);
     measured = &visibility_measured_;
   }
   for (size_t k = objects_.size(); k-- > 0;) {
@@ -496,7 +575,7 @@ void SlamSystem::checkVisibility(const cv::Mat& depth) {
     // Held this frame for leaving the view (not hidden): its visible part is still judged by
     // its association below.
     const bool held_leaving = o.state == ObjectState::kInvisible && o.leaving && !o.hidden;
-    raycaster_.render({{o.volume.get(), o.id, 0.0f}}, visibility_k_, T_world_camera_);
+    raycaster_.render({{o.volume.get(), o.id, 0.0f}}, settings_.visibility_k, T_world_camera_);
     cv::Mat& ids = visibility_ids_;
     raycaster_.download(&visibility_depth_, nullptr, &ids);
     const em::Occlusion occ =
@@ -513,9 +592,9 @@ void SlamSystem::checkVisibility(const cv::Mat& depth) {
     double in_view = 1.0;
     if (opt.leaving_fraction > 0.0 && em::touchesImageEdge(ids, o.id)) {
       // Only an object cut by the image edge can be leaving: cast it alone over the wide view.
-      raycaster_.render({{o.volume.get(), o.id, 0.0f}}, wide_k_, T_world_camera_);
+      raycaster_.render({{o.volume.get(), o.id, 0.0f}}, settings_.wide_k, T_world_camera_);
       raycaster_.download(nullptr, nullptr, &wide_ids_);
-      in_view = em::inViewFraction(wide_ids_, o.id, wide_frame_);
+      in_view = em::inViewFraction(wide_ids_, o.id, settings_.wide_frame);
     }
     o.leaving = em::isLeaving(in_view, opt, o.leaving) && trusted;
     if (o.leaving) {
@@ -545,7 +624,7 @@ void SlamSystem::checkVisibility(const cv::Mat& depth) {
   }
 }
 
-void SlamSystem::confirmIfDue(TrackedObject& o) {
+void ObjectLifecycle::confirmIfDue(TrackedObject& o) {
   if (o.confirmed || o.existence.ex < config_.objects.confirm_detections) return;
   o.confirmed = true;
   logInfo("frame ", frames_, ": object ", o.id, " ('", o.class_name, "') confirmed by ",
@@ -554,14 +633,14 @@ void SlamSystem::confirmIfDue(TrackedObject& o) {
   o.earlier.clear();
 }
 
-void SlamSystem::deleteObject(size_t i, const std::string& reason) {
+void ObjectLifecycle::deleteObject(size_t i, const std::string& reason) {
   TrackedObject& o = objects_[i];
   if (!o.confirmed) {
     // Never reported: no outcome, no mesh, no dormancy.
     logInfo("frame ", frames_, ": tentative object ", o.id, " ('", o.class_name,
             "') dropped: ", reason);
-    object_tracker_.forget(o.volume->index().get());
-    reid_tracker_.forget(o.volume->index().get());
+    object_tracker_.forget(o.volume->key());
+    reid_tracker_.forget(o.volume->key());
     objects_.erase(objects_.begin() + static_cast<std::ptrdiff_t>(i));
     return;
   }
@@ -581,10 +660,10 @@ void SlamSystem::deleteObject(size_t i, const std::string& reason) {
   objects_.erase(objects_.begin() + static_cast<std::ptrdiff_t>(i));
 }
 
-void SlamSystem::eraseObject(TrackedObject& o, const std::string& reason) {
+void ObjectLifecycle::eraseObject(TrackedObject& o, const std::string& reason) {
   if (deletion_hook_) deletion_hook_(o);
-  object_tracker_.forget(o.volume->index().get());
-  reid_tracker_.forget(o.volume->index().get());
+  object_tracker_.forget(o.volume->key());
+  reid_tracker_.forget(o.volume->key());
   ObjectOutcome d;
   d.id = o.id;
   d.class_name = o.class_name;
@@ -600,7 +679,8 @@ void SlamSystem::eraseObject(TrackedObject& o, const std::string& reason) {
   logInfo("frame ", frames_, ": object ", o.id, " ('", o.class_name, "') deleted: ", reason);
 }
 
-void SlamSystem::fillObjectOutcomes(FrameOutcome* out) const {
+std::vector<ObjectOutcome> ObjectLifecycle::outcomes() const {
+  std::vector<ObjectOutcome> out;
   for (const auto* list : {&objects_, &dormant_}) {
     for (const auto& o : *list) {
       if (!o.confirmed) continue;  // tentative: reported once confirmed
@@ -615,12 +695,59 @@ void SlamSystem::fillObjectOutcomes(FrameOutcome* out) const {
       r.first_frame = o.first_frame;
       r.last_frame = o.last_frame;
       r.rendered = o.rendered;
-      out->objects.push_back(r);
+      out.push_back(r);
     }
   }
-  for (const auto& d : deleted_now_) out->objects.push_back(d);
-  std::sort(out->objects.begin(), out->objects.end(),
+  for (const auto& d : deleted_now_) out.push_back(d);
+  std::sort(out.begin(), out.end(),
             [](const ObjectOutcome& a, const ObjectOutcome& b) { return a.id < b.id; });
+  return out;
+}
+
+void ObjectLifecycle::applyRules(bool detector_ran, const cv::Mat& depth) {
+  if (detector_ran) deleteByExistence();
+  if (!objects_.empty()) checkVisibility(depth);
+  expireDormant();
+}
+
+void ObjectLifecycle::keepTentativePoses() {
+  for (TrackedObject& o : objects_) {
+    if (o.confirmed || o.state != ObjectState::kTracked) continue;
+    o.earlier.push_back(
+        {frames_, frame_timestamp_, o.volume->T_world_initial().inverse() * T_world_camera_});
+  }
+}
+
+std::vector<ConfirmedObject> ObjectLifecycle::takeConfirmed() {
+  std::vector<ConfirmedObject> confirmed = std::move(confirmed_now_);
+  confirmed_now_.clear();
+  return confirmed;
+}
+
+std::vector<ObjectPose> ObjectLifecycle::poses() const {
+  std::vector<ObjectPose> poses;
+  for (const auto& o : objects_) poses.push_back({o.id, o.volume->T_world_volume()});
+  return poses;
+}
+
+const map::Volume* ObjectLifecycle::volume(int id) const {
+  for (const auto* list : {&objects_, &dormant_}) {
+    for (const auto& o : *list) {
+      if (o.id == id) return o.volume.get();
+    }
+  }
+  return nullptr;
+}
+
+void ObjectLifecycle::addRenderItems(std::vector<map::RenderItem>* items) const {
+  for (const auto& o : objects_) {
+    if (!o.rendered) continue;
+    map::RenderItem it;
+    it.volume = o.volume.get();
+    it.id = o.id;
+    it.depth_margin_m = static_cast<float>(config_.objects.render_margin_m);
+    items->push_back(it);
+  }
 }
 
 }  // namespace emf::pipeline

@@ -1,4 +1,4 @@
-// Re-identification of SlamSystem (beyond the paper, which deletes an object and starts over):
+// Re-identification of ObjectLifecycle (beyond the paper, which deletes an object and starts over):
 // an object retired by a rule stays dormant with its model (objects.reidentify_frames); a
 // detection that would create a new object is first fitted to the models of the live objects
 // whose pose is stale (lost, or held as hidden or leaving) and of the dormant ones of its class,
@@ -19,7 +19,7 @@
 #include <cstdio>
 
 #include "common/log.h"
-#include "pipeline/slam_system.h"
+#include "pipeline/object_lifecycle.h"
 
 namespace emf::pipeline {
 namespace {
@@ -47,8 +47,8 @@ Eigen::Vector3d modelCentre(const TrackedObject& o) {
 
 }  // namespace
 
-bool SlamSystem::reattach(const io::Detection& d,
-                          const std::vector<Eigen::Vector3d>& points_camera) {
+bool ObjectLifecycle::reattach(const core::Detection& d,
+                               const std::vector<Eigen::Vector3d>& points_camera) {
   const em::ObjectOptions& opt = config_.objects;
   if (opt.reidentify_frames <= 0 || points_camera.size() < 10) return false;
   const Eigen::Vector3d det_camera = centroid(points_camera);
@@ -118,7 +118,7 @@ bool SlamSystem::reattach(const io::Detection& d,
       if (s > 0) {
         // Move the model so that its rendered points' centroid is the detection's.
         volume.setPose(start * T_initial_volume);
-        raycaster_.render({{&volume, o.id, 0.0f}}, visibility_k_, T_world_camera_);
+        raycaster_.render({{&volume, o.id, 0.0f}}, settings_.visibility_k, T_world_camera_);
         cv::Mat depth;
         raycaster_.download(&depth, nullptr, nullptr);
         Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -127,8 +127,9 @@ bool SlamSystem::reattach(const io::Detection& d,
           const float* z = depth.ptr<float>(v);
           for (int u = 0; u < depth.cols; ++u) {
             if (!(z[u] > 0.0f)) continue;
-            sum += Eigen::Vector3d((u - visibility_k_.cx) / visibility_k_.fx * z[u],
-                                   (v - visibility_k_.cy) / visibility_k_.fy * z[u], z[u]);
+            sum += Eigen::Vector3d(
+                (u - settings_.visibility_k.cx) / settings_.visibility_k.fx * z[u],
+                (v - settings_.visibility_k.cy) / settings_.visibility_k.fy * z[u], z[u]);
             ++n;
           }
         }
@@ -140,9 +141,9 @@ bool SlamSystem::reattach(const io::Detection& d,
       const track::PixelRect roi = track::volumeImageBounds(
           (view.dims_blocks.cast<double>() * map::kBlockSize) * view.voxel_size_m, T_volume_camera,
           intrinsics_);
-      reid_tracker_.forget(view.index);
+      reid_tracker_.forget(view.volume_key);
       const track::TrackResult r =
-          reid_tracker_.track(view, objectVertexMap(), reid_q_.get(), T_volume_camera, &roi);
+          reid_tracker_.track(view, vertexMap(), reid_q_.get(), T_volume_camera, &roi);
       logDebug("frame ", frames_, ": re-identification of object ", o.id, " from start ", s, ": ",
                r.lost ? "lost (" + r.loss_reason + ")" : std::string("fitted"), ", inliers ",
                r.inlier_ratio, ", on the model ", r.valid_fraction);
@@ -211,7 +212,7 @@ bool SlamSystem::reattach(const io::Detection& d,
   confirmIfDue(o);
   o.dormant_since = -1;
   o.dormant_reason.clear();
-  object_tracker_.forget(o.volume->index().get());
+  object_tracker_.forget(o.volume->key());
   if (best.dormant) {
     const auto it = std::find_if(dormant_.begin(), dormant_.end(),
                                  [&](const TrackedObject& x) { return &x == &o; });
@@ -221,7 +222,7 @@ bool SlamSystem::reattach(const io::Detection& d,
   return true;
 }
 
-void SlamSystem::expireDormant() {
+void ObjectLifecycle::expireDormant() {
   const em::ObjectOptions& opt = config_.objects;
   auto erase = [&](size_t i, const std::string& why) {
     eraseObject(dormant_[i], why + " (dormant since frame " +
@@ -240,7 +241,7 @@ void SlamSystem::expireDormant() {
   }
   // The pool's room goes to the live volumes first.
   while (!dormant_.empty()) {
-    const map::PoolStats pool = pool_->stats();
+    const map::PoolStats pool = pool_.stats();
     const double free_fraction =
         pool.capacity_slots > 0 ? static_cast<double>(pool.free_slots) / pool.capacity_slots : 0.0;
     if (free_fraction >= opt.min_free_pool_fraction) break;

@@ -6,8 +6,23 @@
 #include <vector>
 
 #include "common/option_binder.h"
+#include "core/ring_policy.h"
 
 namespace emf::pipeline {
+
+enum class DetectorMode { kSequential, kAsync };
+inline const ChoiceNames<DetectorMode>& detectorModeNames() {
+  static const ChoiceNames<DetectorMode> names = {{DetectorMode::kSequential, "sequential"},
+                                                  {DetectorMode::kAsync, "async"}};
+  return names;
+}
+enum class DetectorIsolation { kAuto, kProcess, kNone };
+inline const ChoiceNames<DetectorIsolation>& detectorIsolationNames() {
+  static const ChoiceNames<DetectorIsolation> names = {{DetectorIsolation::kAuto, "auto"},
+                                                       {DetectorIsolation::kProcess, "process"},
+                                                       {DetectorIsolation::kNone, "none"}};
+  return names;
+}
 
 struct DetectorOptions {
   /// Plugin name (looked up on the search path) or path to a shared object; "" = none.
@@ -19,11 +34,11 @@ struct DetectorOptions {
   /// Sequential mode: run the detector on every N-th frame.
   int every_n_frames = 30;
   /// sequential (deterministic, datasets) or async (own thread, live sensors).
-  std::string mode = "sequential";
+  DetectorMode mode = DetectorMode::kSequential;
   /// Where the plugin runs: process (a child process, emf_detector_host: a crash or hang of the
   /// plugin cannot take the SLAM down), none (inside emf), auto (process for a plugin loaded by
   /// path, none for the plugins installed with emf).
-  std::string isolation = "auto";
+  DetectorIsolation isolation = DetectorIsolation::kAuto;
   /// Under process isolation: a detect() call that takes longer is a hang; the child is killed
   /// and restarted (the SLAM waits this long at most in sequential mode).
   double deadline_s = 5.0;
@@ -33,8 +48,8 @@ struct DetectorOptions {
     b.text("plugin_config", plugin_config, "configuration string for the plugin");
     b.textList("search_path", search_path, "extra plugin folders");
     b.integer("every_n_frames", every_n_frames, 1, 100000, "frames", "detection interval");
-    b.choice("mode", mode, {"sequential", "async"}, "how the detector runs");
-    b.choice("isolation", isolation, {"auto", "process", "none"},
+    b.choice("mode", mode, detectorModeNames(), "how the detector runs");
+    b.choice("isolation", isolation, detectorIsolationNames(),
              "plugin in a child process (process), in emf (none), or process for plugins "
              "loaded by path (auto)");
     b.real("deadline_s", deadline_s, 0.01, 3600.0, "s",
@@ -46,14 +61,14 @@ struct RuntimeOptions {
   /// Frame ring slots between capture and SLAM.
   int ring_slots = 4;
   /// drop_oldest (live) or block (replay, lossless).
-  std::string ring_policy = "block";
+  core::RingPolicy ring_policy = core::RingPolicy::kBlock;
   /// Results kept for polling; when the poller is slower the oldest results are discarded
   /// (counted as results_dropped), so a poll always returns the newest ones.
   int result_queue = 32;
 
   void bind(OptionBinder& b) {
     b.integer("ring_slots", ring_slots, 2, 1024, "frames", "frame ring capacity");
-    b.choice("ring_policy", ring_policy, {"drop_oldest", "block"}, "frame ring policy");
+    b.choice("ring_policy", ring_policy, core::ringPolicyNames(), "frame ring policy");
     b.integer("result_queue", result_queue, 1, 100000, "results",
               "results kept for polling (oldest discarded when full)");
   }

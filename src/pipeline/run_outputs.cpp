@@ -157,7 +157,7 @@ std::string runSummaryJson(const SlamSystem& slam, const cl::Context& ctx, const
                  {"platform", ctx.device().platform_name},
                  {"driver", ctx.device().driver_version},
                  {"fallback", ctx.selection().fallback}};
-  const io::Intrinsics& k = slam.intrinsics();
+  const core::Intrinsics& k = slam.intrinsics();
   j["intrinsics"] = {{"fx", k.fx}, {"fy", k.fy},       {"cx", k.cx},
                      {"cy", k.cy}, {"width", k.width}, {"height", k.height}};
   if (info.objects) j["objects"] = objectSummariesJson(*info.objects);

@@ -189,7 +189,7 @@ cv::Mat RunView::compose(const ViewFrame& f) {
       depths[ids[x]].push_back(d[x]);
     }
   }
-  const io::Intrinsics& k = f.intrinsics;
+  const core::Intrinsics& k = f.intrinsics;
   for (const ObjectOutcome& o : f.objects) {
     auto it = depths.find(o.id);
     if (o.state != ObjectState::kTracked || it == depths.end() || k.fx <= 0 || k.fy <= 0) continue;

@@ -38,7 +38,7 @@ struct ViewFrame {
   cv::Mat object_ids;                         // CV_32S, the rendered volume ids (<= 0: none)
   std::vector<AssociationImage> association;  // q per volume (id 0 = background), depth size
   Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();
-  io::Intrinsics intrinsics;           // of the depth image (places objects in the top view)
+  core::Intrinsics intrinsics;         // of the depth image (places objects in the top view)
   std::vector<ObjectOutcome> objects;  // FrameOutcome::objects
   bool lost = false;                   // camera tracking failed
   double ms = 0;                       // the SLAM's time for this frame

@@ -10,143 +10,25 @@
 
 namespace emf::pipeline {
 
-map::VolumeDeviceView deviceView(const map::Volume& volume) {
-  map::VolumeDeviceView v;
-  v.index = volume.index().get();
-  v.dims_blocks = volume.spec().dims_blocks;
-  v.voxels = volume.pool().voxels().get();
-  v.voxel_size_m = volume.spec().voxel_size_m;
-  v.truncation_m = volume.spec().truncation_m;
-  return v;
-}
-
-track::TrackOptions objectTrackOptions(const Config& config, int image_width) {
-  track::TrackOptions o = config.track;
-  o.huber_truncation_factor = config.objects.huber_truncation_factor;
-  // The data term grows with the pixel count: the prior, given for 640x480, with the area.
-  const double area_scale = (image_width / 640.0) * (image_width / 640.0);
-  o.prior_rotation_weight = config.objects.motion_prior_rotation * area_scale;
-  // An object volume is mostly unobserved space around the object, and every pixel inside it
-  // has some association q > 0: the fraction of pixels landing on observed map says nothing
-  // about the object. Its loss is judged by inliers, conditioning, motion and convergence.
-  o.min_valid_fraction = 0.0;
-  // A small object's inliers are fewer and its silhouette pixels land off the model more
-  // often than the background's: the camera's stricter inlier rules would drop good frames.
-  o.min_inlier_ratio = std::min(o.min_inlier_ratio, 0.5);
-  o.recovery_min_inlier_ratio = o.min_inlier_ratio;
-  // Objects cover few pixels: all of them are used at the finest level.
-  o.pixel_stride = 1;
-  // Rotations about the object's own points: the camera is metres away from a small object, and
-  // rotations about a far centre couple rotation and translation
-  // (docs/method.md#object-tracking).
-  o.rotation_centre = "stiffness";
-  // The map-confidence weight W(p) varies strongly across a small, partly observed model:
-  // accepting steps by the cost change made LM crawl and stall at the prediction
-  // (TrackOptions::step_acceptance).
-  o.step_acceptance = "fixed_weights";
-  return o;
-}
-
-track::TrackOptions reidTrackOptions(const Config& config, int image_width) {
-  track::TrackOptions o = objectTrackOptions(config, image_width);
-  // A fit starts from a guess (a heading step, the detection's centroid): how far it moves says
-  // nothing; the fit is judged by its inliers and overlap (object_reid.cpp). The motion prior
-  // would pull towards the guess.
-  o.max_motion_m = 100.0;
-  o.max_motion_deg = 180.0;
-  o.prior_rotation_weight = 0.0;
-  return o;
-}
-
-track::PreprocessOptions objectPreprocessOptions(const Config& config) {
-  track::PreprocessOptions o = config.preprocess;
-  if (!config.objects.filter_depth) {
-    o.bilateral_radius_px = config.objects.depth_filter_radius_px;
-    o.sigma_depth_m = config.objects.depth_filter_sigma_m;
-    // The objects' range sigma stays fixed: growing it with depth as the camera's blends
-    // silhouettes at low resolution (docs/method.md#preprocessing).
-    o.sigma_depth_per_m2 = 0.0;
-    o.hole_margin_px = config.objects.depth_hole_margin_px;
-  }
-  return o;
-}
-
-const char* objectStateName(ObjectState state) {
-  switch (state) {
-    case ObjectState::kTracked:
-      return "tracked";
-    case ObjectState::kLost:
-      return "lost";
-    case ObjectState::kInvisible:
-      return "invisible";
-    case ObjectState::kDeleted:
-      return "deleted";
-    case ObjectState::kDormant:
-      return "dormant";
-  }
-  return "?";
-}
-
-namespace {
-/// `o` with its pixel thresholds (given for 640x480 images) scaled to an image `scale` times as
-/// wide: lengths with the scale, areas with its square.
-em::ObjectOptions scaledPixelThresholds(em::ObjectOptions o, double scale) {
-  o.min_detection_px = static_cast<int>(std::lround(o.min_detection_px * scale));
-  o.visibility_border_px = static_cast<int>(std::lround(o.visibility_border_px * scale));
-  o.invisible_min_px = static_cast<int>(std::lround(o.invisible_min_px * scale * scale));
-  return o;
-}
-}  // namespace
-
 const std::vector<std::string>& SlamSystem::stageNames() {
   static const std::vector<std::string> kStages = {
       "preprocess", "estep", "track", "track_objects", "detect", "objects", "integrate"};
   return kStages;
 }
 
-SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrinsics& intrinsics,
+SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const core::Intrinsics& intrinsics,
                        const std::string& source_uri)
     : ctx_(ctx),
       config_(config),
-      intrinsics_(io::checkedIntrinsics(intrinsics)),
+      intrinsics_(core::checkedIntrinsics(intrinsics)),
       pool_(std::make_unique<map::VoxelPool>(ctx, config.map)),
       preprocessor_(ctx, config.preprocess, intrinsics),
-      object_preprocessor_(ctx, objectPreprocessOptions(config), intrinsics),
       tracker_(ctx, config.track, intrinsics.width, intrinsics.height),
-      object_tracker_(ctx, objectTrackOptions(config, intrinsics.width), intrinsics.width,
-                      intrinsics.height),
-      reid_tracker_(ctx, reidTrackOptions(config, intrinsics.width), intrinsics.width,
-                    intrinsics.height),
       estep_(ctx, config.em, intrinsics.width, intrinsics.height, 1 + config.objects.max_objects),
-      raycaster_(ctx, config.map, intrinsics.width, intrinsics.height),
       timer_(stageNames(), 4096),
       counters_({"track_iterations", "object_track_iterations", "object_track_pixels",
                  "integrated_blocks", "kernel_launches", "host_waits", "bytes_read"},
                 4096) {
-  // Pixel thresholds of the object rules are given for 640x480 images: scale them to the frame,
-  // and for the visibility rule to the size of its ray cast.
-  config_.objects = scaledPixelThresholds(config.objects, intrinsics.width / 640.0);
-  const int frame_width = intrinsics_.width;
-  const int vis_width = config.objects.visibility_width > 0
-                            ? std::min(config.objects.visibility_width, frame_width)
-                            : frame_width;
-  const int vis_height =
-      std::max(1, static_cast<int>(std::lround(static_cast<double>(intrinsics_.height) * vis_width /
-                                               frame_width)));
-  visibility_k_ =
-      vis_width == frame_width ? intrinsics_ : intrinsics_.scaled(vis_width, vis_height);
-  visibility_options_ = scaledPixelThresholds(config.objects, vis_width / 640.0);
-  // The leaving test's wide view: the frame at half its resolution in the middle of a cast of
-  // the frame's size (the ray caster's capacity), twice its field of view across.
-  const int inner_w = std::max(1, intrinsics_.width / 2),
-            inner_h = std::max(1, intrinsics_.height / 2);
-  wide_frame_ = cv::Rect((intrinsics_.width - inner_w) / 2, (intrinsics_.height - inner_h) / 2,
-                         inner_w, inner_h);
-  wide_k_ = intrinsics_.scaled(inner_w, inner_h);
-  wide_k_.cx += wide_frame_.x;
-  wide_k_.cy += wide_frame_.y;
-  wide_k_.width = intrinsics_.width;
-  wide_k_.height = intrinsics_.height;
   if (!config.detector.plugin.empty()) {
     scheduler_ = std::make_unique<DetectorScheduler>(config.detector, source_uri, intrinsics);
   }
@@ -162,11 +44,8 @@ SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrins
   const map::VolumeSpec spec = map::VolumeSpec::background(config.map);
   background_ = std::make_unique<map::Volume>(
       *pool_, spec, map::backgroundVolumePose(config.map, spec, Eigen::Isometry3d::Identity()));
-  const size_t image_bytes = sizeof(float) * static_cast<size_t>(intrinsics.width) *
-                             static_cast<size_t>(intrinsics.height);
-  fg_mask_ = ctx.buffer(CL_MEM_READ_ONLY, image_bytes);
-  new_weights_ = ctx.buffer(CL_MEM_READ_ONLY, image_bytes);
-  reid_q_ = ctx.buffer(CL_MEM_READ_ONLY, image_bytes);
+  objects_ = std::make_unique<ObjectLifecycle>(ctx, config, intrinsics_, *pool_, *background_,
+                                               preprocessor_, estep_, timer_, counters_);
   const double index_mib = static_cast<double>(background_->indexBytes()) / (1 << 20);
   logInfo("background volume: ", spec.dims_blocks.x() * map::kBlockSize, "^3 voxels of ",
           spec.voxel_size_m * 100, " cm (block index ", index_mib, " MiB); pool ",
@@ -184,8 +63,8 @@ SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const io::Intrins
 
 SlamSystem::~SlamSystem() = default;
 
-FrameOutcome SlamSystem::process(const io::Frame& frame,
-                                 const std::vector<io::Detection>* detections) {
+FrameOutcome SlamSystem::process(const core::Frame& frame,
+                                 const std::vector<core::Detection>* detections) {
   if (frame.depth.type() != CV_32FC1 || frame.depth.cols != intrinsics_.width ||
       frame.depth.rows != intrinsics_.height) {
     throw InvalidArgument("frame " + std::to_string(frame.index) + ": depth must be CV_32F " +
@@ -199,13 +78,7 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
   out.index = frames_;
   out.timestamp = frame.timestamp;
   out.first = frames_ == 0;
-  pending_fg_.clear();
-  estep_ids_.clear();
-  unmatched_.clear();
-  created_mask_.release();
-  deleted_now_.clear();
-  confirmed_now_.clear();
-  frame_timestamp_ = frame.timestamp;
+  objects_->beginFrame(frames_, frame.timestamp);
   {
     ScopedStage s(timer_, "preprocess");
     // The range guard's frame limit, once for both preprocessors (same depth range).
@@ -217,9 +90,8 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
     const bool detector_due =
         scheduler_ != nullptr &&
         (scheduler_->async() || frame.index % config_.detector.every_n_frames == 0);
-    if (!config_.objects.filter_depth &&
-        (!objects_.empty() || detections != nullptr || detector_due)) {
-      object_preprocessor_.process(frame.depth, frame_max_m);
+    if (!objects_->empty() || detections != nullptr || detector_due) {
+      objects_->preprocess(frame.depth, frame_max_m);
     }
     ctx_.finish();  // stage times include the device work
   }
@@ -227,15 +99,13 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
   if (!out.first) {
     // Constant-velocity predictions from the last tracked motions (camera and objects).
     const Eigen::Isometry3d T_world_predicted = T_world_camera_ * last_motion_;
-    std::vector<Eigen::Isometry3d> T_oc_predicted;
-    for (const auto& o : objects_) {
-      T_oc_predicted.push_back(o.volume->T_world_volume().inverse() * T_world_camera_ *
-                               o.last_motion);
-    }
-    const bool with_objects = !objects_.empty();
+    const std::vector<Eigen::Isometry3d> T_oc_predicted =
+        objects_->posesInCamera(T_world_camera_, true);
+    const bool with_objects = !objects_->empty();
     if (with_objects) {
       ScopedStage s(timer_, "estep");
-      estep_.compute(objectVertexMap(), eStepVolumes(T_world_predicted, T_oc_predicted));
+      estep_.compute(objects_->vertexMap(),
+                     objects_->eStepVolumes(T_world_predicted, T_oc_predicted));
       ctx_.finish();
     }
     {
@@ -257,10 +127,9 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
       last_motion_ = T_world_camera_.inverse() * T_world_new;
       T_world_camera_ = T_world_new;
     }
-    if (with_objects && !out.lost) trackObjects(T_oc_predicted);
-    if (out.lost) {
-      for (auto& o : objects_) o.state = ObjectState::kLost;
-    }
+    objects_->setCamera(T_world_camera_, last_motion_);
+    if (with_objects && !out.lost) objects_->track(T_oc_predicted);
+    if (out.lost) objects_->markAllLost();
   }
   out.T_world_camera = T_world_camera_;
   if (!out.lost) {
@@ -277,31 +146,29 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
     }
     if (batch) {
       ScopedStage s(timer_, "objects");
-      matchDetections(*batch, &out);
-      createObjects();
+      out.detector_ran = true;
+      out.detections = objects_->matchDetections(*batch, &out.matches);
+      objects_->createObjects();
     }
     {
       ScopedStage s(timer_, "integrate");
-      integrateAll();
-      out.allocation = background_->lastReport();
+      map::IntegrationInput in;
+      in.depth = &preprocessor_.inputDepth();  // raw depth (metres, NaN invalid)
+      in.intrinsics = intrinsics_;
+      in.T_world_camera = T_world_camera_;
+      in.weights = objects_->backgroundWeights();
+      out.allocation = integrateBackground(in);
+      objects_->integrate(in);
       ctx_.finish();
     }
     {
       ScopedStage s(timer_, "objects");
-      if (out.detector_ran) deleteByExistence();
-      if (!objects_.empty()) checkVisibility(frame.depth);
-      expireDormant();
+      objects_->applyRules(out.detector_ran, frame.depth);
     }
   }
-  // Tentative objects keep their tracked poses for the outputs until they are confirmed.
-  for (TrackedObject& o : objects_) {
-    if (o.confirmed || o.state != ObjectState::kTracked) continue;
-    o.earlier.push_back(
-        {frames_, frame.timestamp, o.volume->T_world_initial().inverse() * T_world_camera_});
-  }
-  fillObjectOutcomes(&out);
-  out.confirmed = std::move(confirmed_now_);
-  confirmed_now_.clear();
+  objects_->keepTentativePoses();
+  out.objects = objects_->outcomes();
+  out.confirmed = objects_->takeConfirmed();
   // The OpenCL work of this frame (process-wide counts: a detector thread of the async mode
   // using emf's cl wrappers would be counted here too; the plugins use their own runtimes).
   const cl::WorkCounts work = cl::workCounts();
@@ -314,33 +181,41 @@ FrameOutcome SlamSystem::process(const io::Frame& frame,
   return out;
 }
 
-cl_mem SlamSystem::objectVertexMap() const {
-  return config_.objects.filter_depth ? preprocessor_.vertexMap().get()
-                                      : object_preprocessor_.vertexMap().get();
+map::AllocationReport SlamSystem::integrateBackground(const map::IntegrationInput& in) {
+  const map::AllocationReport report = background_->fuse(in);
+  counters_.add("integrated_blocks", report.listed_blocks);
+  if (report.dropped_blocks > 0) {
+    // Logged the first time and every 100th frame: a full pool is a state, not an event.
+    if (background_pool_full_frames_++ % 100 == 0) {
+      logWarning("frame ", frames_, ": voxel pool full: ", report.dropped_blocks,
+                 " background blocks found no slot (", background_pool_full_frames_,
+                 " frame(s) so far); the map is incomplete and tracking may drift: raise "
+                 "map.memory_mb (",
+                 config_.map.memory_mb, " MiB) or coarsen map.background_voxel_m");
+    }
+  }
+  return report;
 }
 
 DetectorStats SlamSystem::detectorStats() const {
   return scheduler_ ? scheduler_->stats() : DetectorStats{};
 }
 
-std::optional<DetectionBatch> SlamSystem::runDetector(const io::Frame& frame) {
+std::optional<DetectionBatch> SlamSystem::runDetector(const core::Frame& frame) {
   // Feedback for detectors that read the SLAM's state (motion): the background association and
   // the residual, on the frames the detector may run on.
   const bool feedback = scheduler_->readsFeedback() &&
                         (scheduler_->async() || frame.index % config_.detector.every_n_frames == 0);
   cv::Mat q0, residual;
   if (feedback) detectorFeedback(&q0, &residual);
-  std::vector<ObjectPose> poses;
-  for (const auto& o : objects_) poses.push_back({o.id, o.volume->T_world_volume()});
+  const std::vector<ObjectPose> poses = objects_->poses();
   return scheduler_->submit(frame, T_world_camera_, feedback ? &q0 : nullptr,
                             feedback ? &residual : nullptr, &poses);
 }
 
 std::vector<ObjectOutcome> SlamSystem::objects() const {
-  FrameOutcome out;
-  fillObjectOutcomes(&out);
   std::vector<ObjectOutcome> alive;
-  for (auto& o : out.objects) {
+  for (auto& o : objects_->outcomes()) {
     if (o.state != ObjectState::kDeleted) alive.push_back(std::move(o));
   }
   return alive;
@@ -348,12 +223,7 @@ std::vector<ObjectOutcome> SlamSystem::objects() const {
 
 const map::Volume* SlamSystem::volume(int id) const {
   if (id == 0) return background_.get();
-  for (const auto* list : {&objects_, &dormant_}) {
-    for (const auto& o : *list) {
-      if (o.id == id) return o.volume.get();
-    }
-  }
-  return nullptr;
+  return objects_->volume(id);
 }
 
 std::vector<map::RenderItem> SlamSystem::renderItems() const {
@@ -362,23 +232,15 @@ std::vector<map::RenderItem> SlamSystem::renderItems() const {
   bg.volume = background_.get();
   bg.id = 0;
   items.push_back(bg);
-  for (const auto& o : objects_) {
-    if (!o.rendered) continue;
-    map::RenderItem it;
-    it.volume = o.volume.get();
-    it.id = o.id;
-    it.depth_margin_m = static_cast<float>(config_.objects.render_margin_m);
-    items.push_back(it);
-  }
+  objects_->addRenderItems(&items);
   return items;
 }
 
 SlamSystem::Associations SlamSystem::associations() const {
   Associations a;
-  if (estep_ids_.empty()) return a;
-  a.ids = estep_ids_;
-  for (size_t i = 0; i < estep_ids_.size(); ++i)
-    a.q.push_back(estep_.downloadQ(static_cast<int>(i)));
+  if (objects_->eStepIds().empty()) return a;
+  a.ids = objects_->eStepIds();
+  for (size_t i = 0; i < a.ids.size(); ++i) a.q.push_back(estep_.downloadQ(static_cast<int>(i)));
   a.residual = estep_.downloadResidual();
   return a;
 }

@@ -53,14 +53,14 @@ PoolCounters SlamProcessor::pool() const {
   return p;
 }
 
-Runtime::Runtime(std::unique_ptr<io::FrameSource> source, FrameProcessor& processor,
+Runtime::Runtime(std::unique_ptr<core::FrameSource> source, FrameProcessor& processor,
                  const pipeline::RuntimeOptions& options, Callback callback)
     : source_(std::move(source)),
       processor_(processor),
       options_(options),
       callback_(std::move(callback)) {
   if (!source_) throw InvalidArgument("runtime: no frame source");
-  const fw::RingPolicy policy = fw::parseRingPolicy(options_.ring_policy);
+  const fw::RingPolicy policy = options_.ring_policy;
   if (options_.result_queue < 1) {
     throw ConfigError("runtime.result_queue is " + std::to_string(options_.result_queue) +
                       ": must be at least 1");
@@ -158,7 +158,7 @@ void Runtime::fail(std::exception_ptr error, bool now) {
   cv_.notify_all();
 }
 
-bool Runtime::pushFrame(io::Frame& frame) {
+bool Runtime::pushFrame(core::Frame& frame) {
   const fw::FrameRingOptions& o = ring_->options();
   if (frame.depth.cols != o.depth_width || frame.depth.rows != o.depth_height ||
       frame.depth.type() != CV_32FC1) {
@@ -170,7 +170,7 @@ bool Runtime::pushFrame(io::Frame& frame) {
   }
   // The ring copies the images; a colour image of another size than the first frame's (or a
   // ring without colour) travels without colour.
-  io::Frame view;
+  core::Frame view;
   view.index = frame.index;
   view.timestamp = frame.timestamp;
   view.rgb_timestamp = frame.rgb_timestamp;
@@ -204,9 +204,9 @@ void Runtime::captureLoop() {
         capture_done_.store(true, std::memory_order_release);
         return;
       }
-      first_ = io::Frame();
+      first_ = core::Frame();
     }
-    io::Frame frame;
+    core::Frame frame;
     while (!capture_done_.load(std::memory_order_relaxed) &&
            !stop_requested_.load(std::memory_order_acquire)) {
       bool got = false;
@@ -261,7 +261,7 @@ void Runtime::slamLoop() {
         }
       }
       holding = true;
-      io::Frame frame;
+      core::Frame frame;
       frame.index = slot->source_index;
       frame.timestamp = slot->timestamp_s;
       frame.rgb_timestamp = slot->color_timestamp_s;
@@ -293,7 +293,7 @@ void Runtime::slamLoop() {
       const int64_t t0 = steadyNowNs();
       pipeline::FrameOutcome outcome = processor_.process(frame);
       const int64_t t1 = steadyNowNs();
-      frame = io::Frame();
+      frame = core::Frame();
       ring_->release();
       holding = false;
 

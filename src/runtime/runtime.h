@@ -48,8 +48,8 @@
 #include <utility>
 #include <vector>
 
+#include "core/frame_source.h"
 #include "firmware_host/frame_ring.h"
-#include "io/frame_source.h"
 #include "pipeline/pipeline_options.h"
 #include "pipeline/slam_system.h"
 
@@ -69,7 +69,7 @@ class FrameProcessor {
   virtual ~FrameProcessor() = default;
   /// Processes one frame (depth CV_32F metres of the source's intrinsics' size). May throw; an
   /// exception ends the runtime in kFailed.
-  virtual pipeline::FrameOutcome process(const io::Frame& frame) = 0;
+  virtual pipeline::FrameOutcome process(const core::Frame& frame) = 0;
   /// Pool counters after the last process() (called on the SLAM thread).
   virtual PoolCounters pool() const { return {}; }
 };
@@ -78,7 +78,7 @@ class FrameProcessor {
 class SlamProcessor : public FrameProcessor {
  public:
   explicit SlamProcessor(pipeline::SlamSystem& slam) : slam_(slam) {}
-  pipeline::FrameOutcome process(const io::Frame& frame) override { return slam_.process(frame); }
+  pipeline::FrameOutcome process(const core::Frame& frame) override { return slam_.process(frame); }
   PoolCounters pool() const override;
 
  private:
@@ -143,7 +143,7 @@ class Runtime {
   /// that cannot deliver fails at creation), does not start threads. `processor` is borrowed
   /// and must outlive the runtime; `callback` (may be empty) runs on the SLAM thread and must
   /// return quickly. Throws ConfigError for a bad ring policy, IoError from the source.
-  Runtime(std::unique_ptr<io::FrameSource> source, FrameProcessor& processor,
+  Runtime(std::unique_ptr<core::FrameSource> source, FrameProcessor& processor,
           const pipeline::RuntimeOptions& options, Callback callback = {});
   /// Stops, joins, wakes every thread blocked in poll() (they return kStopped) and waits until
   /// they have left it.
@@ -167,7 +167,7 @@ class Runtime {
   std::string sensorError() const;
   /// The fatal error in kFailed (null otherwise).
   std::exception_ptr failure() const;
-  const io::Intrinsics& intrinsics() const { return intrinsics_; }
+  const core::Intrinsics& intrinsics() const { return intrinsics_; }
   std::string describeSource() const { return source_description_; }
   fw::RingPolicy policy() const { return ring_->options().policy; }
 
@@ -178,24 +178,24 @@ class Runtime {
   /// has drained the ring).
   void fail(std::exception_ptr error, bool now);
   /// Pushes `frame` into the ring, retrying a full ring (block) until stop. False when stopped.
-  bool pushFrame(io::Frame& frame);
+  bool pushFrame(core::Frame& frame);
   void setState(RuntimeState state);  // under mutex_, notifies pollers
 
-  std::unique_ptr<io::FrameSource> source_;
+  std::unique_ptr<core::FrameSource> source_;
   FrameProcessor& processor_;
   const pipeline::RuntimeOptions options_;
   Callback callback_;
-  io::Intrinsics intrinsics_;
+  core::Intrinsics intrinsics_;
   std::string source_description_;
   bool reconnecting_ = false;  // the source is a fw::ReconnectingSource
   std::unique_ptr<fw::FrameRing> ring_;
   bool has_first_ = false;  // first_ was read at construction and not yet pushed
-  io::Frame first_;
+  core::Frame first_;
 
   // Detections travel beside the ring (slots carry images only): (source index, detections),
   // pushed by the capture thread before the frame's commit, taken by the SLAM thread.
   std::mutex detections_mutex_;
-  std::deque<std::pair<int64_t, std::vector<io::Detection>>> detections_;
+  std::deque<std::pair<int64_t, std::vector<core::Detection>>> detections_;
 
   std::mutex control_mutex_;  // serialises start() and stop() (and the joins in them)
   std::thread capture_thread_, slam_thread_;

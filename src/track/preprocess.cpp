@@ -16,7 +16,7 @@ bool depthInRange(float d, float min_depth, float max_depth) {
   return !std::isnan(d) && d > 0.0f && d >= min_depth && d <= max_depth;
 }
 
-void checkIntrinsics(const io::Intrinsics& k) {
+void checkIntrinsics(const core::Intrinsics& k) {
   if (!k.valid()) {
     std::ostringstream s;
     s << "preprocessing: invalid intrinsics (fx " << k.fx << ", fy " << k.fy << ", " << k.width
@@ -25,7 +25,7 @@ void checkIntrinsics(const io::Intrinsics& k) {
   }
 }
 
-void checkDepth(const cv::Mat& depth_m, const io::Intrinsics& k) {
+void checkDepth(const cv::Mat& depth_m, const core::Intrinsics& k) {
   if (depth_m.type() != CV_32F || depth_m.cols != k.width || depth_m.rows != k.height) {
     std::ostringstream s;
     s << "preprocessing: depth image must be CV_32F metres of " << k.width << "x" << k.height
@@ -88,7 +88,7 @@ cv::Mat dropHoleMarginReference(const cv::Mat& depth_m, int radius) {
   return out;
 }
 
-PreprocessedFrame preprocessReference(const cv::Mat& input_m, const io::Intrinsics& k,
+PreprocessedFrame preprocessReference(const cv::Mat& input_m, const core::Intrinsics& k,
                                       const PreprocessOptions& o) {
   checkIntrinsics(k);
   checkDepth(input_m, k);
@@ -153,7 +153,7 @@ PreprocessedFrame preprocessReference(const cv::Mat& input_m, const io::Intrinsi
 }
 
 Preprocessor::Preprocessor(cl::Context& ctx, const PreprocessOptions& options,
-                           const io::Intrinsics& intrinsics)
+                           const core::Intrinsics& intrinsics)
     : ctx_(ctx), options_(options), intrinsics_(intrinsics) {
   checkIntrinsics(intrinsics_);
   validatePreprocessOptions(options_);

@@ -7,7 +7,7 @@
 #include <opencv2/core.hpp>
 
 #include "cl/context.h"
-#include "io/frame.h"
+#include "core/frame.h"
 #include "track/track_options.h"
 
 namespace emf::track {
@@ -34,7 +34,7 @@ cv::Mat dropHoleMarginReference(const cv::Mat& depth_m, int radius);
 /// CPU reference of the preprocessing (hole margin, then the preprocess_depth kernel with the
 /// range guard from the largest depth of `depth_m`).
 /// `depth_m`: CV_32F metres, NaN or 0 = invalid.
-PreprocessedFrame preprocessReference(const cv::Mat& depth_m, const io::Intrinsics& intrinsics,
+PreprocessedFrame preprocessReference(const cv::Mat& depth_m, const core::Intrinsics& intrinsics,
                                       const PreprocessOptions& options);
 
 /// Checks the options once (ranges are checked by the config loader; this checks relations).
@@ -47,7 +47,7 @@ class Preprocessor {
  public:
   /// Throws InvalidArgument when the intrinsics are invalid, ConfigError for bad options.
   Preprocessor(cl::Context& ctx, const PreprocessOptions& options,
-               const io::Intrinsics& intrinsics);
+               const core::Intrinsics& intrinsics);
 
   /// Copies `depth_m` (CV_32F metres, intrinsics' size) into the input buffer and runs the
   /// kernel (the range guard's frame limit from the largest depth of `depth_m`). Throws
@@ -74,12 +74,12 @@ class Preprocessor {
   /// Blocking read-back of the results (tests, debugging, exporters).
   PreprocessedFrame download() const;
 
-  const io::Intrinsics& intrinsics() const { return intrinsics_; }
+  const core::Intrinsics& intrinsics() const { return intrinsics_; }
 
  private:
   cl::Context& ctx_;
   PreprocessOptions options_;
-  io::Intrinsics intrinsics_;
+  core::Intrinsics intrinsics_;
   cl::KernelHandle kernel_;
   cl::KernelHandle margin_kernel_;
   cl::MemHandle input_;

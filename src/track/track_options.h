@@ -58,6 +58,26 @@ struct PreprocessOptions {
   }
 };
 
+enum class FinalReduction { kHost, kDevice };
+inline const ChoiceNames<FinalReduction>& finalReductionNames() {
+  static const ChoiceNames<FinalReduction> names = {{FinalReduction::kHost, "host"},
+                                                    {FinalReduction::kDevice, "device"}};
+  return names;
+}
+enum class RotationCentre { kCamera, kStiffness, kOrigin };
+inline const ChoiceNames<RotationCentre>& rotationCentreNames() {
+  static const ChoiceNames<RotationCentre> names = {{RotationCentre::kCamera, "camera"},
+                                                    {RotationCentre::kStiffness, "stiffness"},
+                                                    {RotationCentre::kOrigin, "origin"}};
+  return names;
+}
+enum class StepAcceptance { kCost, kFixedWeights };
+inline const ChoiceNames<StepAcceptance>& stepAcceptanceNames() {
+  static const ChoiceNames<StepAcceptance> names = {
+      {StepAcceptance::kCost, "cost"}, {StepAcceptance::kFixedWeights, "fixed_weights"}};
+  return names;
+}
+
 struct TrackOptions {
   int max_iterations = 100;
   /// LM's initial damping mu0 = lm_tau * max diag(H) (default 1e-3; the paper: 1e3, whose first
@@ -99,7 +119,7 @@ struct TrackOptions {
   /// prediction doubles the scale of the next steps, up to this factor (1 = plain LM).
   double max_step_scale = 8.0;
   /// Where the per-work-group partial sums are added up: "host" or "device" (second kernel).
-  std::string final_reduction = "host";
+  FinalReduction final_reduction = FinalReduction::kHost;
   /// Centre of the rotation increments LM solves for: "camera" (the camera centre, the usual
   /// camera-frame parametrisation), "stiffness" (stiffnessCentre of the Hessian: about the
   /// centroid of the constraining points) or "origin" (the volume's origin, the left increments
@@ -107,7 +127,7 @@ struct TrackOptions {
   /// rotation and translation. "stiffness" is not the camera default: on the tum-fr3-cabinet
   /// keyframes it stopped converging and re-acquired a wrong pose that passed every loss rule.
   /// Objects use "stiffness" (pipeline::objectTrackOptions, docs/method.md#object-tracking).
-  std::string rotation_centre = "camera";
+  RotationCentre rotation_centre = RotationCentre::kCamera;
   /// What LM's step acceptance compares with the model's predicted decrease: "cost" (the cost
   /// sum c rho(r) at both poses, c = q W(p) sampled at each) or "fixed_weights" (the new
   /// residuals weighted by the c of the accepted pose, as in the model; IRLS). The model holds c
@@ -116,7 +136,7 @@ struct TrackOptions {
   /// damping barely falls, and LM crawls and stops near the prediction. The camera keeps
   /// "cost"; objects use "fixed_weights" (pipeline::objectTrackOptions,
   /// docs/method.md#object-tracking).
-  std::string step_acceptance = "cost";
+  StepAcceptance step_acceptance = StepAcceptance::kCost;
 
   // Tracking loss: a frame is lost when any rule fires (evaluated at the final pose, finest
   // level). See track::Tracker.
@@ -179,11 +199,11 @@ struct TrackOptions {
            "stop when the Gauss-Newton step is below this norm (0 = off)");
     b.real("max_step_scale", max_step_scale, 1.0, 64.0, "",
            "LM step extrapolation limit where the cost falls faster than predicted (1 = off)");
-    b.choice("final_reduction", final_reduction, {"host", "device"},
+    b.choice("final_reduction", final_reduction, finalReductionNames(),
              "where the per-work-group partial sums are added");
-    b.choice("rotation_centre", rotation_centre, {"camera", "stiffness", "origin"},
+    b.choice("rotation_centre", rotation_centre, rotationCentreNames(),
              "centre of the rotation increments LM solves for (objects: stiffness)");
-    b.choice("step_acceptance", step_acceptance, {"cost", "fixed_weights"},
+    b.choice("step_acceptance", step_acceptance, stepAcceptanceNames(),
              "LM accepts a step by the cost change (cost) or by the change of the residuals "
              "at the accepted pose's weights (fixed_weights, IRLS; objects use this)");
     b.real("min_valid_fraction", min_valid_fraction, 0.0, 1.0, "",

@@ -215,15 +215,6 @@ Tracker::Tracker(cl::Context& ctx, const TrackOptions& options, int width, int h
     s << "tracking: image size " << width << "x" << height << " is invalid";
     throw InvalidArgument(s.str());
   }
-  if (options_.final_reduction != "host" && options_.final_reduction != "device") {
-    throw ConfigError("track.final_reduction must be host or device, got '" +
-                      options_.final_reduction + "'");
-  }
-  if (options_.rotation_centre != "camera" && options_.rotation_centre != "stiffness" &&
-      options_.rotation_centre != "origin") {
-    throw ConfigError("track.rotation_centre must be camera, stiffness or origin, got '" +
-                      options_.rotation_centre + "'");
-  }
   const std::string defs =
       "-DTRACK_LX=" + std::to_string(kLocalX) + " -DTRACK_LY=" + std::to_string(kLocalY);
   accumulate_ = ctx_.kernel("track_reduce", "track_accumulate", defs);
@@ -260,7 +251,7 @@ size_t Tracker::kernelLocalMemoryBytes() const {
 }
 
 PixelRect volumeImageBounds(const Eigen::Vector3d& extent_m,
-                            const Eigen::Isometry3d& T_volume_camera, const io::Intrinsics& k) {
+                            const Eigen::Isometry3d& T_volume_camera, const core::Intrinsics& k) {
   const PixelRect whole{0, 0, k.width, k.height};
   const Eigen::Isometry3d T_camera_volume = T_volume_camera.inverse();
   double u_min = std::numeric_limits<double>::infinity(), u_max = -u_min;
@@ -322,7 +313,7 @@ NormalEquations Tracker::evaluate(const map::VolumeDeviceView& volume, cl_mem ve
 cv::Mat Tracker::lastPixelCosts() const {
   cv::Mat cost(height_, width_, CV_32F), weight(height_, width_, CV_32F, cv::Scalar(0));
   ctx_.read(costs_[current_], cost.ptr<float>(0), cost.total() * sizeof(float));
-  if (options_.step_acceptance == "fixed_weights") {
+  if (options_.step_acceptance == StepAcceptance::kFixedWeights) {
     ctx_.read(weights_[current_], weight.ptr<float>(0), weight.total() * sizeof(float));
   }
   cv::Mat out;
@@ -359,12 +350,13 @@ NormalEquations Tracker::evaluateCandidate(const map::VolumeDeviceView& volume, 
               delta, inlier_delta, static_cast<cl_float>(options_.inlier_noise_per_m2),
               costs_[current_].get(), costs_[1 - current_].get(), weights_[current_].get(),
               weights_[1 - current_].get(), compare ? 1 : 0,
-              static_cast<cl_int>(options_.step_acceptance == "fixed_weights"), partials_.get());
+              static_cast<cl_int>(options_.step_acceptance == StepAcceptance::kFixedWeights),
+              partials_.get());
   cl::enqueue(ctx_.queue(), accumulate_,
               static_cast<size_t>((grid.su1 - grid.su0 + kLanes - 1) / kLanes),
               static_cast<size_t>(grid.sv1 - grid.sv0), 0, kLocalX, kLocalY);
   double t[kTerms] = {};
-  if (options_.final_reduction == "device") {
+  if (options_.final_reduction == FinalReduction::kDevice) {
     cl::setArgs(reduce_, partials_.get(), groups, reduced_.get());
     cl::enqueue(ctx_.queue(), reduce_, kTerms);
     float out[kTerms];
@@ -400,8 +392,8 @@ Tracker::LevelResult Tracker::runLevel(const map::VolumeDeviceView& volume, cl_m
   // background lost most of redkitchen as degenerate). LM runs on increments h' about the
   // centre chosen by track.rotation_centre at the start of the level instead (H' = M H M^T,
   // g' = M g, volume increment h = M^T h'); step sizes below are those of h'.
-  const Matrix6d M = options_.rotation_centre == "origin" ? Matrix6d::Identity()
-                     : options_.rotation_centre == "stiffness"
+  const Matrix6d M = options_.rotation_centre == RotationCentre::kOrigin ? Matrix6d::Identity()
+                     : options_.rotation_centre == RotationCentre::kStiffness
                          ? centringMap(stiffnessCentre(at_T->H))
                          : centringMap(T->translation());
   // Motion prior (prior_*_weight): E_p = d' Lambda d' / 2, d' the pose's left difference from
@@ -557,21 +549,22 @@ TrackResult Tracker::track(const map::VolumeDeviceView& volume, cl_mem vertex_ma
     why << "inlier ratio " << result.inlier_ratio << " (" << ne.inliers << " of " << ne.valid
         << " points within the inlier radius) is below track.min_inlier_ratio "
         << options_.min_inlier_ratio;
-  } else if (recovering(volume.index) && (result.motion_m > options_.recovery_max_motion_m ||
-                                          result.motion_deg > options_.recovery_max_motion_deg)) {
+  } else if (recovering(volume.volume_key) &&
+             (result.motion_m > options_.recovery_max_motion_m ||
+              result.motion_deg > options_.recovery_max_motion_deg)) {
     result.loss = TrackLoss::kLargeMotion;
     why << "recovering after a lost frame: the pose moved " << result.motion_m << " m / "
         << result.motion_deg
         << " deg from the last tracked one, beyond track.recovery_max_motion_m "
         << options_.recovery_max_motion_m << " / track.recovery_max_motion_deg "
         << options_.recovery_max_motion_deg << " (no relocalisation)";
-  } else if (recovering(volume.index) &&
-             result.strict_inlier_ratio < recoveryInlierRatio(volume.index)) {
+  } else if (recovering(volume.volume_key) &&
+             result.strict_inlier_ratio < recoveryInlierRatio(volume.volume_key)) {
     result.loss = TrackLoss::kFewInliers;
     why << "recovering after a lost frame: inlier ratio " << result.strict_inlier_ratio << " ("
         << ne.strict_inliers << " of " << ne.valid
         << " points within track.inlier_truncation_factor of the truncation) is below "
-        << recoveryInlierRatio(volume.index) << " (track.recovery_min_inlier_ratio "
+        << recoveryInlierRatio(volume.volume_key) << " (track.recovery_min_inlier_ratio "
         << options_.recovery_min_inlier_ratio << ", at most the volume's typical inlier ratio - "
         << kRecoveryMargin << ")";
   } else if (result.inverse_condition < options_.min_inverse_condition) {
@@ -588,33 +581,33 @@ TrackResult Tracker::track(const map::VolumeDeviceView& volume, cl_mem vertex_ma
   result.loss_reason = why.str();
   if (!result.lost) {
     // Running typical (strict) inlier ratio of the volume's tracked calls.
-    const auto t = typical_inliers_.find(volume.index);
+    const auto t = typical_inliers_.find(volume.volume_key);
     if (t == typical_inliers_.end()) {
-      typical_inliers_[volume.index] = result.strict_inlier_ratio;
+      typical_inliers_[volume.volume_key] = result.strict_inlier_ratio;
     } else {
       t->second += kTypicalRate * (result.strict_inlier_ratio - t->second);
     }
   }
-  const auto it = std::find(lost_volumes_.begin(), lost_volumes_.end(), volume.index);
-  if (result.lost && it == lost_volumes_.end()) lost_volumes_.push_back(volume.index);
+  const auto it = std::find(lost_volumes_.begin(), lost_volumes_.end(), volume.volume_key);
+  if (result.lost && it == lost_volumes_.end()) lost_volumes_.push_back(volume.volume_key);
   if (!result.lost && it != lost_volumes_.end()) lost_volumes_.erase(it);
   return result;
 }
 
-double Tracker::recoveryInlierRatio(cl_mem volume_index) const {
-  const auto t = typical_inliers_.find(volume_index);
+double Tracker::recoveryInlierRatio(uint64_t volume_key) const {
+  const auto t = typical_inliers_.find(volume_key);
   if (t == typical_inliers_.end()) return options_.recovery_min_inlier_ratio;
   return std::min(options_.recovery_min_inlier_ratio, t->second - kRecoveryMargin);
 }
 
-void Tracker::forget(cl_mem volume_index) {
-  lost_volumes_.erase(std::remove(lost_volumes_.begin(), lost_volumes_.end(), volume_index),
+void Tracker::forget(uint64_t volume_key) {
+  lost_volumes_.erase(std::remove(lost_volumes_.begin(), lost_volumes_.end(), volume_key),
                       lost_volumes_.end());
-  typical_inliers_.erase(volume_index);
+  typical_inliers_.erase(volume_key);
 }
 
-bool Tracker::recovering(cl_mem volume_index) const {
-  return std::find(lost_volumes_.begin(), lost_volumes_.end(), volume_index) != lost_volumes_.end();
+bool Tracker::recovering(uint64_t volume_key) const {
+  return std::find(lost_volumes_.begin(), lost_volumes_.end(), volume_key) != lost_volumes_.end();
 }
 
 }  // namespace emf::track

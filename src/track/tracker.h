@@ -37,10 +37,11 @@
 //   balancedInverseCondition(H) < min_inverse_condition -> kDegenerate
 //   finest level ended at max_iterations (lost_if_not_converged) -> kNotConverged
 // A lost result still carries the estimate; the caller keeps its last good pose and does not
-// integrate the frame. "Recovering": the previous track() call on the same volume (identified
-// by its index buffer) was lost; the stricter inlier rule then applies until a call succeeds
-// (no relocalisation yet: a re-acquired pose near the last good one may be a wrong fit), and
-// so does the recovery motion rule (SlamSystem starts a recovering call at the last good pose).
+// integrate the frame. "Recovering": the previous track() call on the same volume (its
+// VolumeDeviceView::volume_key, which survives growth) was lost; the stricter inlier rule then
+// applies until a call succeeds (no relocalisation yet: a re-acquired pose near the last good one
+// may be a wrong fit), and so does the recovery motion rule (SlamSystem starts a recovering call at
+// the last good pose).
 #pragma once
 
 #include <Eigen/Geometry>
@@ -50,7 +51,7 @@
 #include <vector>
 
 #include "cl/context.h"
-#include "io/frame.h"
+#include "core/frame.h"
 #include "map/volume_view.h"
 #include "map/voxel_layout.h"
 #include "track/se3.h"
@@ -106,7 +107,7 @@ struct PixelRect {
 /// front of the camera (z <= 1 mm). Pixel (u, v) back-projects along ((u - cx) / fx,
 /// (v - cy) / fy, 1), as the preprocessing does.
 PixelRect volumeImageBounds(const Eigen::Vector3d& extent_m,
-                            const Eigen::Isometry3d& T_volume_camera, const io::Intrinsics& k);
+                            const Eigen::Isometry3d& T_volume_camera, const core::Intrinsics& k);
 
 /// Why a frame was declared lost (TrackResult::loss).
 enum class TrackLoss {
@@ -167,15 +168,15 @@ class Tracker {
   /// stride keep stale values). Blocking read; for tests.
   cv::Mat lastPixelCosts() const;
 
-  /// True when the last track() call on the volume with this index buffer was lost.
-  bool recovering(cl_mem volume_index) const;
-  /// Drops what the tracker remembers of the volume with this index buffer (lost state, typical
-  /// inlier ratio): call when the volume is freed (a new one may get the same buffer) or when
-  /// its next call must not count as a recovery (a pose found by other means).
-  void forget(cl_mem volume_index);
+  /// True when the last track() call on the volume (VolumeDeviceView::volume_key) was lost.
+  bool recovering(uint64_t volume_key) const;
+  /// Drops what the tracker remembers of the volume (lost state, typical inlier ratio): call
+  /// when the volume is freed or when its next call must not count as a recovery (a pose found
+  /// by other means).
+  void forget(uint64_t volume_key);
   /// Inlier ratio a recovering call on the volume must reach: recovery_min_inlier_ratio, at
   /// most the volume's typical (running) inlier ratio minus a margin.
-  double recoveryInlierRatio(cl_mem volume_index) const;
+  double recoveryInlierRatio(uint64_t volume_key) const;
 
   const TrackOptions& options() const { return options_; }
   int width() const { return width_; }
@@ -222,8 +223,9 @@ class Tracker {
   cl::MemHandle weights_[2];  // per-pixel weights c, the same (step_acceptance fixed_weights)
   int current_ = 0;
   std::vector<float> host_partials_;
-  std::vector<cl_mem> lost_volumes_;          // index buffers of volumes whose last call was lost
-  std::map<cl_mem, double> typical_inliers_;  // running inlier ratio of each volume's tracked calls
+  std::vector<uint64_t> lost_volumes_;  // keys of volumes whose last call was lost
+  std::map<uint64_t, double>
+      typical_inliers_;  // running inlier ratio of each volume's tracked calls
 };
 
 /// Centre c about which rotations decouple best from translations for the information H of

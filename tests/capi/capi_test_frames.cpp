@@ -10,7 +10,8 @@
 #include <fstream>
 #include <iostream>
 
-#include "io/frame_source.h"
+#include "core/frame_source.h"
+#include "sources/open_source.h"
 
 namespace {
 
@@ -27,14 +28,14 @@ int main(int argc, char** argv) {
   try {
     const std::string dir = argv[1];
     std::filesystem::create_directories(dir);
-    emf::io::SourceOptions options;
-    auto src = emf::io::openSource(kUri, options);
-    const emf::io::Intrinsics k = src->intrinsics();
+    emf::core::SourceOptions options;
+    auto src = emf::sources::openSource(kUri, options);
+    const emf::core::Intrinsics k = src->intrinsics();
     std::ofstream list(dir + "/frames.txt");
     list.precision(17);
     list << k.width << " " << k.height << " " << k.fx << " " << k.fy << " " << k.cx << " " << k.cy
          << " " << src->size() << "\n";
-    emf::io::Frame f;
+    emf::core::Frame f;
     Eigen::Isometry3d T_world_first = Eigen::Isometry3d::Identity();
     for (int i = 0; src->next(f); ++i) {
       if (i == 0) T_world_first = *f.T_world_camera_gt;

@@ -48,7 +48,10 @@ TEST(ClSelection, SubstringAndTypeMatch) {
   ASSERT_FALSE(devices.empty());
   ClOptions o;
   o.device = devices.back().device_name.substr(0, 4);
-  o.device_type = devices.back().type == "other" ? "any" : devices.back().type;
+  o.device_type = DeviceType::kAny;
+  for (const auto& [type, name] : deviceTypeNames()) {
+    if (devices.back().type == name) o.device_type = type;
+  }
   const DeviceSelection s = selectDevice(o);
   EXPECT_FALSE(s.fallback) << s.reason;
   EXPECT_NE(s.device.device_name.find(o.device), std::string::npos);

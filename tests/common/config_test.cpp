@@ -1,4 +1,4 @@
-#include "common/config.h"
+#include "pipeline/config.h"
 
 #include <yaml-cpp/yaml.h>
 
@@ -116,6 +116,39 @@ TEST(Config, SetOverridesOneKey) {
               0u)
         << e.what();
   }
+}
+
+TEST(Config, ChoicesAreReadIntoTheirEnums) {
+  Config c;
+  c.set("track.rotation_centre=origin");
+  c.set("track.step_acceptance=fixed_weights");
+  c.set("track.final_reduction=device");
+  c.set("em.association=pfg");
+  c.set("detector.mode=async");
+  c.set("detector.isolation=none");
+  EXPECT_EQ(c.track.rotation_centre, track::RotationCentre::kOrigin);
+  EXPECT_EQ(c.track.step_acceptance, track::StepAcceptance::kFixedWeights);
+  EXPECT_EQ(c.track.final_reduction, track::FinalReduction::kDevice);
+  EXPECT_EQ(c.em.association, em::Association::kPfg);
+  EXPECT_EQ(c.detector.mode, pipeline::DetectorMode::kAsync);
+  EXPECT_EQ(c.detector.isolation, pipeline::DetectorIsolation::kNone);
+  // Written back as their key texts.
+  const Config back = Config::loadString(c.toYaml(), "round trip");
+  EXPECT_EQ(back.track.rotation_centre, track::RotationCentre::kOrigin);
+  EXPECT_EQ(back.detector.isolation, pipeline::DetectorIsolation::kNone);
+  EXPECT_NE(c.toYaml().find("step_acceptance: fixed_weights"), std::string::npos);
+  // A text that is not a choice names the key and the valid ones.
+  for (const char* bad :
+       {"detector.mode=sometimes", "track.rotation_centre=volume", "track.final_reduction=gpu"}) {
+    try {
+      c.set(bad);
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const ConfigError& e) {
+      const std::string key = std::string(bad).substr(0, std::string(bad).find('='));
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(c.detector.mode, pipeline::DetectorMode::kAsync);
 }
 
 TEST(Config, ValidateCatchesProgrammaticErrors) {

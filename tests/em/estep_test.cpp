@@ -94,7 +94,7 @@ ObjectVolume makeObject(const test::AnalyticScene::Box& box) {
   return o;
 }
 
-cv::Mat backProject(const cv::Mat& depth, const io::Intrinsics& k) {
+cv::Mat backProject(const cv::Mat& depth, const core::Intrinsics& k) {
   cv::Mat vertex(depth.size(), CV_32FC4, cv::Scalar(0, 0, 0, 0));
   for (int v = 0; v < depth.rows; ++v) {
     for (int u = 0; u < depth.cols; ++u) {
@@ -124,7 +124,7 @@ TEST_P(EStepModes, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
 
   // 161 pixels per row: the last group of 16 pixels is partial; a run of invalid vertices on
   // row 10 makes whole groups that no volume contains.
-  io::Intrinsics k = test::smallCamera().scaled(161, 120);
+  core::Intrinsics k = test::smallCamera().scaled(161, 120);
   const Eigen::Isometry3d T_bg_camera = test::roomCornerCamera();
   const cv::Mat depth = scene.render(k, T_bg_camera);
   const cv::Mat wall_depth = walls.render(k, T_bg_camera);
@@ -132,8 +132,8 @@ TEST_P(EStepModes, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
   for (int u = 20; u < 60; ++u) vertex.at<cv::Vec4f>(10, u) = cv::Vec4f(0, 0, 0, 0);
 
   EmOptions options;
-  options.association = GetParam();
-  const bool em_mode = options.association == "em";
+  options.association = std::string(GetParam()) == "em" ? Association::kEm : Association::kPfg;
+  const bool em_mode = options.association == Association::kEm;
   std::vector<EStepHostVolume> host = {
       {background.view(), T_bg_camera, {}},
       {obj1.view(), obj1.T_background_object.inverse() * T_bg_camera, {}},

@@ -13,8 +13,8 @@ namespace {
 constexpr double kIoUGridTolerance = 0.02;      // boxIoU sampling error at n = 24
 constexpr double kTruncationToleranceM = 1e-9;  // objectTruncation: exact arithmetic
 
-io::Detection detection(const std::string& cls, cv::Rect box, cv::Size image = {640, 480}) {
-  io::Detection d;
+core::Detection detection(const std::string& cls, cv::Rect box, cv::Size image = {640, 480}) {
+  core::Detection d;
   d.class_name = cls;
   d.score = 0.9f;
   d.box = box;
@@ -251,7 +251,7 @@ TEST(ObjectRules, ObjectTruncationInVoxelsWithAPixelFloorAndTheMapsCap) {
 
 TEST(ObjectRules, CreationChecks) {
   ObjectOptions o;
-  io::Detection d = detection("cup", {100, 100, 100, 100});
+  core::Detection d = detection("cup", {100, 100, 100, 100});
   VolumePlacement p;
   p.centre_world = Eigen::Vector3d(0, 0, 2);
   p.extent_m = 0.4;
@@ -288,13 +288,13 @@ TEST(ObjectRules, CreationChecks) {
 
   // A box that passes the size filter but lies half in the 20 px border band: 40 x 40 at the
   // left edge leaves 20 x 40 = 800 visible px < 1600: deleted at once, so not created.
-  const io::Detection edge = detection("cup", {0, 200, 40, 40});
+  const core::Detection edge = detection("cup", {0, 200, 40, 40});
   EXPECT_EQ(detectionUse(edge, o), DetectionUse::kUse);
   EXPECT_EQ(maskVisiblePixels(edge.mask, o), 20 * 40);
   EXPECT_FALSE(mayCreate(edge, p, cam, {}, ids, o, &why));
   EXPECT_NE(why.find("invisible_min_px"), std::string::npos) << why;
   // Mask values at or below 0.5 are not the object's.
-  io::Detection faint = d;
+  core::Detection faint = d;
   faint.mask = d.mask.clone();  // (a copied Detection shares d's pixels)
   faint.mask *= 0.5f;
   EXPECT_EQ(maskVisiblePixels(faint.mask, o), 0);

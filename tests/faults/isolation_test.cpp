@@ -31,8 +31,8 @@ const std::string kFaulty = std::string(EMF_TEST_PLUGIN_DIR) + "/libemf_detector
 constexpr double kDeadlineS = 30.0;
 constexpr double kLoadS = 60.0;
 
-io::Frame frame(int64_t index) {
-  io::Frame f;
+core::Frame frame(int64_t index) {
+  core::Frame f;
   f.index = index;
   f.timestamp = 0.1 * static_cast<double>(index);
   f.timestamp_text = std::to_string(f.timestamp);
@@ -50,7 +50,7 @@ std::unique_ptr<IsolatedDetector> start(const std::string& config, double deadli
 void expectTheCup(const DetectorOutput& out) {
   ASSERT_TRUE(out.error.empty()) << out.error;
   ASSERT_EQ(out.detections.size(), 1u);
-  const io::Detection& d = out.detections[0];
+  const core::Detection& d = out.detections[0];
   EXPECT_EQ(d.class_name, "cup");
   EXPECT_FLOAT_EQ(d.score, 0.9f);
   EXPECT_EQ(d.box, cv::Rect(20, 10, 40, 20));
@@ -133,9 +133,9 @@ TEST(Isolation, AutoIsolatesPluginsLoadedByPathOnly) {
   EXPECT_TRUE(usesProcess(o, kFaulty));
   const std::string bundled = resolvePluginPath("maskfile", modulePluginFolders());
   EXPECT_FALSE(usesProcess(o, bundled));
-  o.isolation = "process";
+  o.isolation = DetectorIsolation::kProcess;
   EXPECT_TRUE(usesProcess(o, bundled));
-  o.isolation = "none";
+  o.isolation = DetectorIsolation::kNone;
   EXPECT_FALSE(usesProcess(o, kFaulty));
 }
 

@@ -197,7 +197,7 @@ TEST(FrameRing, PushCopiesFramesAndRejectsWrongSizes) {
   o.color_width = 4;
   o.color_height = 3;
   FrameRing ring(o);
-  io::Frame f;
+  core::Frame f;
   f.index = 17;
   f.timestamp = 1.5;
   f.rgb_timestamp = 1.52;
@@ -207,7 +207,7 @@ TEST(FrameRing, PushCopiesFramesAndRejectsWrongSizes) {
   f.depth.at<float>(1, 2) = std::numeric_limits<float>::quiet_NaN();
   f.color = cv::Mat(3, 4, CV_8UC3, cv::Scalar(1, 2, 3));
   ASSERT_EQ(ring.push(f), RingStatus::kOk);
-  io::Frame out;
+  core::Frame out;
   ASSERT_EQ(ring.pop(out, 0.0), RingStatus::kOk);
   EXPECT_EQ(out.index, 17);
   EXPECT_EQ(out.timestamp, 1.5);
@@ -220,7 +220,7 @@ TEST(FrameRing, PushCopiesFramesAndRejectsWrongSizes) {
   }
   EXPECT_EQ(cv::norm(out.color, f.color, cv::NORM_INF), 0.0);
 
-  io::Frame wrong = f;
+  core::Frame wrong = f;
   wrong.depth = cv::Mat(4, 4, CV_32F, cv::Scalar(0));
   try {
     ring.push(wrong);
@@ -231,7 +231,7 @@ TEST(FrameRing, PushCopiesFramesAndRejectsWrongSizes) {
   }
   EXPECT_EQ(ring.stats().produced, 1u);
 
-  io::Frame long_text = f;
+  core::Frame long_text = f;
   long_text.timestamp_text = std::string(kTimestampTextCapacity, '7');
   try {
     ring.push(long_text);

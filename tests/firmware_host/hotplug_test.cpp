@@ -171,14 +171,14 @@ struct Cable {
   int opens = 0;
 };
 
-class FakeSensor : public io::FrameSource {
+class FakeSensor : public core::FrameSource {
  public:
   explicit FakeSensor(Cable& cable) : cable_(cable) {
     if (!cable.plugged) throw IoError("fake sensor: no device (unplugged)");
     ++cable.opens;
   }
-  io::Intrinsics intrinsics() const override {
-    io::Intrinsics k;
+  core::Intrinsics intrinsics() const override {
+    core::Intrinsics k;
     k.fx = k.fy = 500;
     k.cx = 2;
     k.cy = 1.5;
@@ -186,7 +186,7 @@ class FakeSensor : public io::FrameSource {
     k.height = 3;
     return k;
   }
-  bool next(io::Frame& f) override {
+  bool next(core::Frame& f) override {
     if (!cable_.plugged) throw SensorDisconnected("fake sensor: device gone");
     f.index = 1000 + n_;  // the wrapper renumbers
     f.timestamp = 0.1 * static_cast<double>(n_++);
@@ -208,7 +208,7 @@ TEST(ReconnectingSource, DocumentedErrorStateAndRecovery) {
   o.reconnect_wait_s = 0.005;
   ReconnectingSource src([&] { return std::make_unique<FakeSensor>(cable); }, "fake:cam", o);
   EXPECT_EQ(src.intrinsics().fx, 500);
-  io::Frame f;
+  core::Frame f;
   for (int i = 0; i < 3; ++i) {
     ASSERT_TRUE(src.next(f));
     EXPECT_EQ(f.index, i);
@@ -251,7 +251,7 @@ TEST(Hotplug, MonitorAndStreamAgreeOnUnplugAndReplug) {
   o.retry_interval_s = 0.001;
   o.reconnect_wait_s = 0.005;
   ReconnectingSource src([&] { return std::make_unique<FakeSensor>(cable); }, "openni2:", o);
-  io::Frame f;
+  core::Frame f;
   ASSERT_TRUE(src.next(f));
 
   bus.unplug("1.4");

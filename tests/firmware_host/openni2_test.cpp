@@ -132,13 +132,13 @@ TEST(Openni2Virtual, LosslessReplayMatchesPngsTimestampsAndIntrinsics) {
   const std::string dir = kitchen();
   const TumList depth_list = readList(dir + "/depth.txt");
   const TumList rgb_list = readList(dir + "/rgb.txt");
-  io::SourceOptions options;
+  core::SourceOptions options;
   Openni2Source src("openni2:emf-virtual://" + dir + ";speed=0", options);
   EXPECT_EQ(src.size(), 300);
   EXPECT_TRUE(src.isLive());
   EXPECT_FALSE(src.registered());  // the device honestly supports only registration off
   EXPECT_TRUE(src.synced());
-  const io::Intrinsics k = src.intrinsics();
+  const core::Intrinsics k = src.intrinsics();
   EXPECT_EQ(k.width, 640);
   EXPECT_EQ(k.height, 480);
   EXPECT_NEAR(k.fx, 585.0, kFovIntrinsicsTolerancePx);
@@ -149,7 +149,7 @@ TEST(Openni2Virtual, LosslessReplayMatchesPngsTimestampsAndIntrinsics) {
 
   constexpr int kFrames = 12;
   for (int i = 0; i < kFrames; ++i) {
-    io::Frame f;
+    core::Frame f;
     ASSERT_TRUE(src.next(f)) << i;
     EXPECT_EQ(f.index, i);
     EXPECT_NEAR(f.timestamp, depth_list.stamps[static_cast<size_t>(i)], 1e-6);
@@ -165,14 +165,14 @@ TEST(Openni2Virtual, LosslessReplayMatchesPngsTimestampsAndIntrinsics) {
 
 TEST(Openni2Virtual, RecordingEndsAfterLastFrameAnd100umDepth) {
   const std::string dir = makeTinyFolder(3);
-  io::SourceOptions options;
+  core::SourceOptions options;
   Openni2Source src("openni2:emf-virtual://" + dir + ";speed=0", options);
   EXPECT_EQ(src.size(), 3);
   EXPECT_NEAR(src.intrinsics().fx, 50.0, kFovIntrinsicsTolerancePx);
   EXPECT_NEAR(src.intrinsics().fy, 52.0, kFovIntrinsicsTolerancePx);
   EXPECT_NE(src.describe().find("DEPTH_100_UM"), std::string::npos) << src.describe();
   for (int i = 0; i < 3; ++i) {
-    io::Frame f;
+    core::Frame f;
     ASSERT_TRUE(src.next(f));
     char name[64];
     std::snprintf(name, sizeof(name), "/depth/%06d.png", i);
@@ -189,7 +189,7 @@ TEST(Openni2Virtual, RecordingEndsAfterLastFrameAnd100umDepth) {
               i == 0 ? "1305031102.000000" : (i == 1 ? "1305031102.100000" : "1305031102.200000"));
     EXPECT_EQ(f.color.at<cv::Vec3b>(0, 0), cv::Vec3b(static_cast<uchar>(10 * i), 100, 200));
   }
-  io::Frame f;
+  core::Frame f;
   EXPECT_FALSE(src.next(f));
 }
 
@@ -197,11 +197,11 @@ TEST(Openni2Virtual, ABrokenFileIsADroppedFrameReportedOnStderr) {
   // As a real sensor the device drops the frame, but it says which file and why.
   const std::string dir = makeTinyFolder(4);
   std::ofstream(dir + "/depth/000002.png", std::ios::trunc) << "not a png";
-  io::SourceOptions options;
+  core::SourceOptions options;
   Openni2Source src("openni2:emf-virtual://" + dir + ";speed=0", options);
   testing::internal::CaptureStderr();
   std::vector<std::string> stamps;
-  io::Frame f;
+  core::Frame f;
   while (src.next(f)) stamps.push_back(f.timestamp_text);
   const std::string err = testing::internal::GetCapturedStderr();
   EXPECT_EQ(stamps, (std::vector<std::string>{"1305031102.000000", "1305031102.100000",
@@ -213,12 +213,12 @@ TEST(Openni2Virtual, ABrokenFileIsADroppedFrameReportedOnStderr) {
 TEST(Openni2Virtual, RealTimeDeviceFramesMatchTheirPngs) {
   const std::string dir = kitchen();
   const TumList depth_list = readList(dir + "/depth.txt");
-  io::SourceOptions options;
+  core::SourceOptions options;
   Openni2Source src("openni2:emf-virtual://" + dir, options);  // speed 1: a 30 Hz camera
   int64_t last_index = -1;
   double last_stamp = -1;
   for (int n = 0; n < 8; ++n) {
-    io::Frame f;
+    core::Frame f;
     ASSERT_TRUE(src.next(f));
     ASSERT_GT(f.index, last_index);  // frames may be skipped (live), never repeated
     ASSERT_GE(f.index, 0);
@@ -271,7 +271,7 @@ TEST(Openni2Virtual, OniRecordingPlaysBackThroughOpenNI2) {
     openni::OpenNI::shutdown();
   }
   ASSERT_TRUE(fs::exists(oni));
-  io::SourceOptions options;
+  core::SourceOptions options;
   Openni2Source src("openni2:" + oni, options);
   EXPECT_FALSE(src.isLive());
   EXPECT_NE(src.describe().find("recording"), std::string::npos) << src.describe();
@@ -280,7 +280,7 @@ TEST(Openni2Virtual, OniRecordingPlaysBackThroughOpenNI2) {
   // equal that PNG exactly. OpenNI2's recorder renumbers frames from 1 and rebases timestamps to
   // the first recorded frame, so those are checked relative to the first frame.
   std::vector<int> seen;
-  io::Frame f;
+  core::Frame f;
   while (src.next(f)) {
     ASSERT_LT(seen.size(), 10u) << "playback did not end";
     const int i = static_cast<int>(std::lround(f.depth.at<float>(0, 1) / 2e-4) - 5003) / 97;
@@ -324,14 +324,14 @@ TEST(Openni2Virtual, FullCalibrationFarDepthAndBadFolders) {
   cv::Mat far = cv::imread(dir + "/depth/000000.png", cv::IMREAD_UNCHANGED);
   far(cv::Rect(0, 0, 16, 8)).setTo(40000);  // 8 m: beyond what 100 um units hold (6.5535 m)
   ASSERT_TRUE(cv::imwrite(dir + "/depth/000000.png", far));
-  io::SourceOptions options;
+  core::SourceOptions options;
   {
     Openni2Source src("openni2:emf-virtual://" + dir + ";speed=0", options);
     EXPECT_EQ(src.intrinsics().fx, 50.0);
     EXPECT_EQ(src.intrinsics().fy, 52.0);
     EXPECT_EQ(src.intrinsics().cx, 31.5);
     EXPECT_EQ(src.intrinsics().cy, 23.5);
-    io::Frame f;
+    core::Frame f;
     ASSERT_TRUE(src.next(f));
     // Invalid, not a phantom wall at 6.5535 m; the rest of the image is served as before.
     EXPECT_EQ(cv::countNonZero(f.depth(cv::Rect(0, 0, 16, 8)) == f.depth(cv::Rect(0, 0, 16, 8))),
@@ -351,7 +351,7 @@ TEST(Openni2Virtual, FullCalibrationFarDepthAndBadFolders) {
 }
 
 TEST(Openni2Errors, ClearMessagesForMissingDevicesAndBadParameters) {
-  io::SourceOptions options;
+  core::SourceOptions options;
   std::string e = errorOf([&] { Openni2Source("openni2:emf-virtual:///no/such/folder", options); });
   EXPECT_NE(e.find("cannot open device 'emf-virtual:///no/such/folder'"), std::string::npos) << e;
   EXPECT_NE(e.find("/no/such/folder/depth.txt: cannot open"), std::string::npos) << e;
@@ -391,7 +391,7 @@ TEST(Openni2Hotplug, UnplugIsAnErrorStateAndReplugResumes) {
   }
   const std::string control = test::tempDir("plug") + "/cable";
   writeControl(control, "plugged");
-  io::SourceOptions options;
+  core::SourceOptions options;
   auto source = openSensorSource(
       "openni2:emf-virtual://" + dir + ";control=" + control + "?timeout_s=1", options);
   auto* rs = dynamic_cast<ReconnectingSource*>(source.get());
@@ -399,7 +399,7 @@ TEST(Openni2Hotplug, UnplugIsAnErrorStateAndReplugResumes) {
 
   auto readAndCheck = [&](int n) {
     for (int i = 0; i < n; ++i) {
-      io::Frame f;
+      core::Frame f;
       ASSERT_TRUE(source->next(f));
       ASSERT_EQ(index_of_stamp.count(f.timestamp_text), 1u) << f.timestamp_text;
       const size_t k = index_of_stamp[f.timestamp_text];
@@ -412,7 +412,7 @@ TEST(Openni2Hotplug, UnplugIsAnErrorStateAndReplugResumes) {
   writeControl(control, "unplugged");
   int errors = 0;
   for (int attempt = 0; attempt < 3; ++attempt) {
-    io::Frame f;
+    core::Frame f;
     try {
       // Frames already buffered before the unplug may still arrive; the error must follow.
       for (int i = 0; i < 5; ++i) source->next(f);

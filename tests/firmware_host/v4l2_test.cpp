@@ -262,7 +262,7 @@ TEST(V4l2Errors, MissingNodesNonCamerasAndMissingIntrinsics) {
   e = errorOf([] { V4l2Device("/etc/hostname"); });
   EXPECT_NE(e.find("is not a device node"), std::string::npos) << e;
 
-  io::SourceOptions options;
+  core::SourceOptions options;
   e = errorOf([&] { V4l2Source("v4l2:/dev/null", options); });
   EXPECT_NE(e.find("does not report intrinsics"), std::string::npos) << e;
   e = errorOf([&] { V4l2Source("v4l2:/dev/null?fx=500&fy=500", options); });
@@ -297,11 +297,11 @@ TEST(V4l2Capture, StreamsDepthFromConnectedCameras) {
                     "conversion and pairing tests above cover the device-independent code";
   }
   for (const auto& node : nodes) {
-    io::SourceOptions options;
+    core::SourceOptions options;
     V4l2Source src("v4l2:" + node + "?fx=600&fy=600", options);
     double last = -1;
     for (int i = 0; i < 5; ++i) {
-      io::Frame f;
+      core::Frame f;
       ASSERT_TRUE(src.next(f)) << node;
       EXPECT_EQ(f.depth.type(), CV_32FC1);
       EXPECT_EQ(f.depth.cols, src.intrinsics().width);

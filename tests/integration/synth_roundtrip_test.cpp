@@ -3,9 +3,10 @@
 // (after the format's quantisation), poses and detections as written.
 #include <cmath>
 
-#include "io/frame_source.h"
+#include "core/frame_source.h"
 #include "io/klg.h"
 #include "io/tum_writer.h"
+#include "sources/open_source.h"
 #include "test_support.h"
 
 namespace emf::io {
@@ -44,28 +45,28 @@ class SynthRoundTrip : public ::testing::TestWithParam<std::string> {};
 TEST_P(SynthRoundTrip, TumFolderReadsBackExactly) {
   const std::string preset = GetParam();
   const std::string dir = test::tempDir("roundtrip-" + preset);
-  SourceOptions options;
+  core::SourceOptions options;
   // Detections every 4 frames so a short sequence carries some.
-  auto synth =
-      openSource("synth:" + preset + "?frames=9&width=160&height=120&det_every=4", options);
-  std::vector<Frame> frames;
+  auto synth = sources::openSource("synth:" + preset + "?frames=9&width=160&height=120&det_every=4",
+                                   options);
+  std::vector<core::Frame> frames;
   {
     TumWriter writer(dir, synth->intrinsics());
-    Frame f;
+    core::Frame f;
     while (synth->next(f)) {
       writer.write(f);
       frames.push_back(f);
     }
     writer.finish();
   }
-  auto tum = openSource("tum:" + dir, options);  // calibration.txt, depth scale 5000
+  auto tum = sources::openSource("tum:" + dir, options);  // calibration.txt, depth scale 5000
   EXPECT_EQ(tum->intrinsics().width, 160);
   EXPECT_NEAR(tum->intrinsics().fx, synth->intrinsics().fx, 1e-6);
-  Frame r;
+  core::Frame r;
   size_t i = 0, with_detections = 0;
   while (tum->next(r)) {
     ASSERT_LT(i, frames.size());
-    const Frame& w = frames[i];
+    const core::Frame& w = frames[i];
     EXPECT_EQ(r.timestamp_text, w.timestamp_text);
     EXPECT_EQ(depthMismatches(r.depth, quantised(w.depth, 5000.0)), 0) << "frame " << i;
     ASSERT_TRUE(r.T_world_camera_gt && w.T_world_camera_gt);
@@ -77,9 +78,9 @@ TEST_P(SynthRoundTrip, TumFolderReadsBackExactly) {
       // Overlapping masks share one id image (the higher score wins), so a read detection is
       // the written one with the same id, minus what higher-scoring ones cover.
       ASSERT_LE(r.detections->size(), w.detections->size());
-      for (const Detection& a : *r.detections) {
-        const Detection* b = nullptr;
-        for (const Detection& c : *w.detections) {
+      for (const core::Detection& a : *r.detections) {
+        const core::Detection* b = nullptr;
+        for (const core::Detection& c : *w.detections) {
           if (c.id == a.id) b = &c;
         }
         ASSERT_NE(b, nullptr) << "frame " << i << " detection " << a.id;
@@ -101,24 +102,25 @@ INSTANTIATE_TEST_SUITE_P(Presets, SynthRoundTrip,
 
 TEST(SynthKlg, RoundTripIsBitExactAtMillimetres) {
   const std::string path = test::tempDir("klg") + "/cars.klg";
-  SourceOptions options;
-  auto synth = openSource("synth:cars?frames=6&width=160&height=120", options);
-  std::vector<Frame> frames;
+  core::SourceOptions options;
+  auto synth = sources::openSource("synth:cars?frames=6&width=160&height=120", options);
+  std::vector<core::Frame> frames;
   {
     KlgWriter writer(path);
-    Frame f;
+    core::Frame f;
     while (synth->next(f)) {
       writer.write(f);
       frames.push_back(f);
     }
     writer.close();
   }
-  const Intrinsics k = synth->intrinsics();
-  auto klg = openSource("klg:" + path + "?width=160&height=120&fx=" + std::to_string(k.fx) +
-                            "&fy=" + std::to_string(k.fy) + "&cx=" + std::to_string(k.cx) +
-                            "&cy=" + std::to_string(k.cy),
-                        options);
-  Frame r;
+  const core::Intrinsics k = synth->intrinsics();
+  auto klg =
+      sources::openSource("klg:" + path + "?width=160&height=120&fx=" + std::to_string(k.fx) +
+                              "&fy=" + std::to_string(k.fy) + "&cx=" + std::to_string(k.cx) +
+                              "&cy=" + std::to_string(k.cy),
+                          options);
+  core::Frame r;
   size_t i = 0;
   while (klg->next(r)) {
     ASSERT_LT(i, frames.size());

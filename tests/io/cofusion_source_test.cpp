@@ -8,6 +8,7 @@
 
 #include "io/depth_image.h"
 #include "io_test_util.h"
+#include "sources/open_source.h"
 #include "test_support.h"
 
 namespace emf::io {
@@ -54,12 +55,12 @@ std::string makeFolder(const std::string& depth_subdir = "") {
 TEST(CoFusionSource, ReadsExrDepthColourAndInstanceIds) {
   for (const char* sub : {"", "depth_noise"}) {
     const std::string dir = makeFolder(sub);
-    auto s = openSource("cofusion:" + dir, SourceOptions{});
+    auto s = sources::openSource("cofusion:" + dir, core::SourceOptions{});
     EXPECT_EQ(s->size(), 3);
     EXPECT_EQ(s->intrinsics().fx, 20);
     EXPECT_EQ(s->intrinsics().fy, 21);
     EXPECT_EQ(s->intrinsics().width, 16);
-    Frame f;
+    core::Frame f;
     for (int i = 1; i <= 3; ++i) {
       ASSERT_TRUE(s->next(f)) << i;
       EXPECT_EQ(f.index, i - 1);
@@ -92,38 +93,39 @@ TEST(CoFusionSource, ErrorsNameTheFiles) {
   {
     const std::string dir = makeFolder();
     fs::remove(dir + "/Color0002.png");
-    expectErrorContaining([&] { openSource("cofusion:" + dir, SourceOptions{}); },
+    expectErrorContaining([&] { sources::openSource("cofusion:" + dir, core::SourceOptions{}); },
                           {"Depth0002.exr", "no colour image"});
   }
   {
     const std::string dir = makeFolder();
     writeText(dir + "/Depth0002.exr", "not an exr");
-    auto s = openSource("cofusion:" + dir, SourceOptions{});
-    Frame f;
+    auto s = sources::openSource("cofusion:" + dir, core::SourceOptions{});
+    core::Frame f;
     ASSERT_TRUE(s->next(f));
     expectErrorContaining([&] { s->next(f); }, {"cannot decode depth EXR", "Depth0002.exr"});
   }
   {
     const std::string dir = makeFolder();
     fs::remove(dir + "/calibration.txt");
-    expectErrorContaining([&] { openSource("cofusion:" + dir, SourceOptions{}); },
+    expectErrorContaining([&] { sources::openSource("cofusion:" + dir, core::SourceOptions{}); },
                           {"no intrinsics", "calibration.txt"});
-    auto s = openSource("cofusion:" + dir + "?fx=1&fy=2&cx=3&cy=4&fps=10", SourceOptions{});
-    Frame f;
+    auto s = sources::openSource("cofusion:" + dir + "?fx=1&fy=2&cx=3&cy=4&fps=10",
+                                 core::SourceOptions{});
+    core::Frame f;
     ASSERT_TRUE(s->next(f));
     ASSERT_TRUE(s->next(f));
     EXPECT_DOUBLE_EQ(f.timestamp, 0.1);
   }
   {
     const std::string dir = test::tempDir("cofusion");
-    expectErrorContaining([&] { openSource("cofusion:" + dir, SourceOptions{}); },
+    expectErrorContaining([&] { sources::openSource("cofusion:" + dir, core::SourceOptions{}); },
                           {"not a Co-Fusion folder", "Depth####.exr"});
   }
   {
     // The same number padded twice: one file would have been dropped without a word.
     const std::string dir = makeFolder();
     fs::copy_file(dir + "/Depth0003.exr", dir + "/Depth3.exr");
-    expectErrorContaining([&] { openSource("cofusion:" + dir, SourceOptions{}); },
+    expectErrorContaining([&] { sources::openSource("cofusion:" + dir, core::SourceOptions{}); },
                           {"Depth3.exr", "Depth0003.exr", "both have number 3"});
   }
 }
@@ -133,9 +135,9 @@ TEST(CoFusionSource, AGapInTheNumberingIsAGapInTime) {
   const std::string dir = makeFolder();
   fs::remove(dir + "/Depth0002.exr");
   fs::remove(dir + "/Color0002.png");
-  auto s = openSource("cofusion:" + dir, SourceOptions{});
+  auto s = sources::openSource("cofusion:" + dir, core::SourceOptions{});
   EXPECT_EQ(s->size(), 2);
-  Frame f;
+  core::Frame f;
   ASSERT_TRUE(s->next(f));
   EXPECT_DOUBLE_EQ(f.timestamp, 0.0);
   ASSERT_TRUE(s->next(f));

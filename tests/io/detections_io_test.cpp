@@ -47,7 +47,7 @@ TEST(DetectionsIo, ReadsIdsClassesScoresBoxesAndMasks) {
   const auto dets = readFrameDetections(f.dir, "1.5", kSize);
   ASSERT_TRUE(dets.has_value());
   ASSERT_EQ(dets->size(), 2u);
-  const Detection& d1 = (*dets)[0];
+  const core::Detection& d1 = (*dets)[0];
   EXPECT_EQ(d1.id, 1);
   EXPECT_EQ(d1.class_name, "teddy bear");
   EXPECT_FLOAT_EQ(d1.score, 0.9f);
@@ -56,7 +56,7 @@ TEST(DetectionsIo, ReadsIdsClassesScoresBoxesAndMasks) {
   ASSERT_EQ(d1.mask.size(), kSize);
   EXPECT_EQ(cv::sum(d1.mask)[0], kBox1.area());
   EXPECT_EQ(cv::countNonZero(d1.mask), kBox1.area());  // so every mask value is 0 or 1
-  const Detection& d2 = (*dets)[1];
+  const core::Detection& d2 = (*dets)[1];
   EXPECT_EQ(d2.class_name, "car");
   EXPECT_EQ(d2.box, kBox2);  // the missing corner pixel does not shrink the box
   EXPECT_EQ(cv::sum(d2.mask)[0], kBox2.area() - 1);

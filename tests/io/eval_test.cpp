@@ -1,6 +1,6 @@
 // Evaluation: the TUM tools' reference figures, hand-made cases with known answers, object
 // matching, errors, and the `emf eval` command.
-#include "io/eval.h"
+#include "eval/eval.h"
 
 #include <filesystem>
 #include <fstream>
@@ -43,13 +43,13 @@ Eigen::Isometry3d pose(const Eigen::Vector3d& t, double yaw, double pitch = 0, d
 
 TEST(Eval, ReproducesTheTumToolsOnTheReferencePair) {
   const Trajectory gt = readTrajectory(refGt()), est = readTrajectory(refEst());
-  const AteResult ate = computeAte(gt, est, 0.02);
+  const eval::AteResult ate = eval::computeAte(gt, est, 0.02);
   EXPECT_EQ(ate.pairs, 786u);
   EXPECT_NEAR(ate.trans_m.rmse, 0.013473, kReferenceTolM);
   EXPECT_NEAR(ate.trans_m.mean, 0.012029, kReferenceTolM);
   EXPECT_NEAR(ate.trans_m.median, 0.011176, kReferenceTolM);
   EXPECT_NEAR(ate.trans_m.max, 0.034727, kReferenceTolM);
-  const RpeResult rpe = computeRpe(gt, est, 1.0);
+  const eval::RpeResult rpe = eval::computeRpe(gt, est, 1.0);
   EXPECT_EQ(rpe.pairs, 753u);
   EXPECT_NEAR(rpe.trans_m.rmse, 0.021217, kReferenceTolM);
   EXPECT_NEAR(rpe.rot_deg.rmse, 0.934480, kReferenceTolDeg);
@@ -60,12 +60,12 @@ TEST(Eval, RigidlyMovedCopyHasZeroError) {
   Trajectory est;
   const Eigen::Isometry3d T = pose(Eigen::Vector3d(3, -2, 0.5), 1.1, -0.4, 0.3);
   for (size_t i = 0; i < gt.size(); i += 3) est.append(gt.stamps[i] + 0.001, T * gt.poses[i]);
-  const AteResult ate = computeAte(gt, est, 0.02);
+  const eval::AteResult ate = eval::computeAte(gt, est, 0.02);
   EXPECT_EQ(ate.pairs, est.size());
   EXPECT_LT(ate.trans_m.max, kExactTolM);
   // The alignment found is the inverse of the applied transform.
   EXPECT_LT(((ate.T_gt_est * T).matrix() - Eigen::Matrix4d::Identity()).norm(), 1e-9);
-  const RpeResult rpe = computeRpe(gt, est, 1.0);
+  const eval::RpeResult rpe = eval::computeRpe(gt, est, 1.0);
   EXPECT_LT(rpe.trans_m.max, kExactTolM);
   EXPECT_LT(rpe.rot_deg.max, kZeroAngleTolDeg);
 }
@@ -83,7 +83,7 @@ TEST(Eval, KnownOffsetOnHalfThePosesIsHalvedByTheAlignment) {
     gt.append(i * 0.1, pose(p, s));
     est.append(i * 0.1 + 0.005, pose(p + (i % 2 ? d : Eigen::Vector3d::Zero()), s));
   }
-  const AteResult ate = computeAte(gt, est, 0.02);
+  const eval::AteResult ate = eval::computeAte(gt, est, 0.02);
   EXPECT_EQ(ate.pairs, 200u);
   for (double e :
        {ate.trans_m.rmse, ate.trans_m.mean, ate.trans_m.median, ate.trans_m.min, ate.trans_m.max}) {
@@ -95,7 +95,7 @@ TEST(Eval, KnownOffsetOnHalfThePosesIsHalvedByTheAlignment) {
   for (size_t i = 0; i < gt.size(); ++i) {
     all.append(gt.stamps[i], pose(gt.poses[i].translation() + d, 0));
   }
-  EXPECT_LT(computeAte(gt, all, 0.02).trans_m.max, kExactTolM);
+  EXPECT_LT(eval::computeAte(gt, all, 0.02).trans_m.max, kExactTolM);
 }
 
 // Constant-velocity cases at 30 Hz: the RPE over 1 s is the velocity difference x 1 s.
@@ -109,7 +109,7 @@ TEST(Eval, RpeOnConstantVelocityMotion) {
     faster.append(t, pose(Eigen::Vector3d(0.6 * t, 0, 0), yaw_rate * t));
   }
   // For each i, j = i + 30 (closest to t_i + 1 s); pairs whose j is the last pose are dropped.
-  const RpeResult r = computeRpe(gt, faster, 1.0);
+  const eval::RpeResult r = eval::computeRpe(gt, faster, 1.0);
   EXPECT_EQ(r.pairs, static_cast<size_t>(n - 31));
   EXPECT_NEAR(r.trans_m.rmse, 0.1, kExactTolM);
   EXPECT_NEAR(r.trans_m.min, 0.1, kExactTolM);
@@ -122,7 +122,7 @@ TEST(Eval, RpeOnConstantVelocityMotion) {
     spin_gt.append(t, pose(Eigen::Vector3d(1, 2, 3), 20.0 * M_PI / 180 * t, 0.3));
     spin_est.append(t, pose(Eigen::Vector3d(1, 2, 3), 22.0 * M_PI / 180 * t, 0.3));
   }
-  const RpeResult s = computeRpe(spin_gt, spin_est, 1.0);
+  const eval::RpeResult s = eval::computeRpe(spin_gt, spin_est, 1.0);
   EXPECT_NEAR(s.rot_deg.rmse, 2.0, kExactTolDeg);
   EXPECT_NEAR(s.rot_deg.min, 2.0, kExactTolDeg);
   EXPECT_LT(s.trans_m.max, kExactTolM);
@@ -154,7 +154,7 @@ TEST(Eval, ThreeCorneredHatRecoversEachTrajectorysOwnStepError) {
       traj[i].append(t, truth * noise);
     }
   }
-  const ThreeCorneredHat h = threeCorneredHat(traj[0], traj[1], traj[2], 1.0 / 30);
+  const eval::ThreeCorneredHat h = eval::threeCorneredHat(traj[0], traj[1], traj[2], 1.0 / 30);
   EXPECT_EQ(h.ab.pairs, static_cast<size_t>(n - 1));  // every pose and the next one
   // 3000 steps: the rms of each pairwise RPE is within ~2 % of its expectation, and the exact
   // copy's share comes out of differences of such figures.
@@ -181,7 +181,7 @@ TEST(Eval, ThreeCorneredHatRecoversEachTrajectorysOwnStepError) {
     if (k < 1000 || k >= 1500) b_gaps.append(traj[1].stamps[k], traj[1].poses[k]);
     if (k % 3 != 0) c_gaps.append(traj[2].stamps[k], traj[2].poses[k]);
   }
-  const ThreeCorneredHat g = threeCorneredHat(traj[0], b_gaps, c_gaps, 1.0 / 30);
+  const eval::ThreeCorneredHat g = eval::threeCorneredHat(traj[0], b_gaps, c_gaps, 1.0 / 30);
   // b keeps 2500 poses; c drops the multiples of 3 among them: 334 below 1000, 500 from 1500.
   EXPECT_EQ(g.common_poses, static_cast<size_t>(2500 - 334 - 500));
   EXPECT_EQ(g.ab.pairs, g.ac.pairs);
@@ -194,14 +194,14 @@ TEST(Eval, ThreeCorneredHatRecoversEachTrajectorysOwnStepError) {
 }
 
 TEST(Eval, StatsFollowNumpy) {
-  const ErrorStats s = errorStats({4, 1, 3, 2});
+  const eval::ErrorStats s = eval::errorStats({4, 1, 3, 2});
   EXPECT_DOUBLE_EQ(s.median, 2.5);
   EXPECT_DOUBLE_EQ(s.mean, 2.5);
   EXPECT_DOUBLE_EQ(s.rmse, std::sqrt(7.5));
   EXPECT_DOUBLE_EQ(s.std, std::sqrt(1.25));
   EXPECT_DOUBLE_EQ(s.min, 1);
   EXPECT_DOUBLE_EQ(s.max, 4);
-  EXPECT_DOUBLE_EQ(errorStats({3, 1, 2}).median, 2);
+  EXPECT_DOUBLE_EQ(eval::errorStats({3, 1, 2}).median, 2);
 }
 
 // ---- objects and folders ----------------------------------------------------------------------
@@ -256,13 +256,13 @@ struct ObjectScene {
 
 TEST(Eval, ObjectsMatchTheLowestAteAmongCoveringEstimates) {
   const ObjectScene scene;
-  const EvalReport r = evaluatePaths(scene.gt_dir, scene.est_dir, EvalOptions{});
+  const eval::EvalReport r = eval::evaluatePaths(scene.gt_dir, scene.est_dir, eval::EvalOptions{});
   ASSERT_TRUE(r.camera.ate.has_value());
   EXPECT_LT(r.camera.ate->trans_m.max, kExactTolM * 10);  // camera.txt = ground truth (9 decimals)
   EXPECT_DOUBLE_EQ(r.camera.coverage, 1.0);
   ASSERT_EQ(r.objects.size(), 2u);
 
-  const ObjectEval& o1 = r.objects[0];
+  const eval::ObjectEval& o1 = r.objects[0];
   EXPECT_EQ(o1.gt_id, 1);
   ASSERT_TRUE(o1.est_id.has_value());
   EXPECT_EQ(*o1.est_id, 7);
@@ -273,7 +273,7 @@ TEST(Eval, ObjectsMatchTheLowestAteAmongCoveringEstimates) {
   EXPECT_NEAR(o1.eval.ate->trans_m.rmse, 0.002 * std::sqrt(3.0), 0.0008);
   EXPECT_TRUE(o1.eval.rpe.has_value());
 
-  const ObjectEval& o2 = r.objects[1];
+  const eval::ObjectEval& o2 = r.objects[1];
   EXPECT_EQ(o2.gt_id, 2);
   ASSERT_TRUE(o2.est_id.has_value());
   EXPECT_EQ(*o2.est_id, 3);
@@ -294,9 +294,9 @@ TEST(Eval, ObjectsMatchTheLowestAteAmongCoveringEstimates) {
   EXPECT_EQ(r.unmatched_est_ids, (std::vector<int>{5, 9}));
 
   // With a 15% threshold the exact partial estimate wins.
-  EvalOptions low;
+  eval::EvalOptions low;
   low.min_object_coverage = 0.15;
-  const EvalReport r2 = evaluatePaths(scene.gt_dir, scene.est_dir, low);
+  const eval::EvalReport r2 = eval::evaluatePaths(scene.gt_dir, scene.est_dir, low);
   EXPECT_EQ(*r2.objects[1].est_id, 5);
   EXPECT_DOUBLE_EQ(r2.objects[1].eval.coverage, 0.2);
 }
@@ -307,9 +307,9 @@ TEST(Eval, UnmatchedObjectIsReportedNotFatal) {
     fs::remove(scene.est_dir + "/" + f);
   }
   // object-7 covers all of GT object 1 but only half of GT object 2.
-  EvalOptions options;
+  eval::EvalOptions options;
   options.min_object_coverage = 0.6;
-  const EvalReport r = evaluatePaths(scene.gt_dir, scene.est_dir, options);
+  const eval::EvalReport r = eval::evaluatePaths(scene.gt_dir, scene.est_dir, options);
   ASSERT_EQ(r.objects.size(), 2u);
   EXPECT_EQ(r.objects[0].est_id, 7);
   EXPECT_FALSE(r.objects[1].est_id.has_value());
@@ -319,7 +319,7 @@ TEST(Eval, UnmatchedObjectIsReportedNotFatal) {
                                         "(best 50.0%)"),
             std::string::npos)
       << r.objects[1].eval.note;
-  EXPECT_NE(formatReport(r).find("object 2"), std::string::npos);
+  EXPECT_NE(eval::formatReport(r).find("object 2"), std::string::npos);
 }
 
 TEST(Eval, OneEstimatePerGroundTruthObject) {
@@ -337,8 +337,8 @@ TEST(Eval, OneEstimatePerGroundTruthObject) {
     copy_a.append(t, T);
     near_b.append(t, pose({1.0, 2.0, 0.0}, 0.7) * pose({i % 2 ? 0.01 : -0.01, 0.0, 0.0}, 0.0) * T);
   }
-  const std::vector<ObjectEval> r =
-      evaluateObjects({{1, a}, {2, b}}, {{4, copy_a}, {6, near_b}}, EvalOptions{});
+  const std::vector<eval::ObjectEval> r =
+      eval::evaluateObjects({{1, a}, {2, b}}, {{4, copy_a}, {6, near_b}}, eval::EvalOptions{});
   ASSERT_EQ(r.size(), 2u);
   ASSERT_TRUE(r[0].est_id && r[1].est_id);
   EXPECT_EQ(*r[0].est_id, 4);
@@ -353,14 +353,16 @@ TEST(Eval, OneEstimatePerGroundTruthObject) {
     }
   }
   // With estimate 4 alone, object 2 is left without one and says why.
-  const std::vector<ObjectEval> alone = evaluateObjects({{1, a}, {2, b}}, {{4, copy_a}}, {});
+  const std::vector<eval::ObjectEval> alone =
+      eval::evaluateObjects({{1, a}, {2, b}}, {{4, copy_a}}, {});
   EXPECT_FALSE(alone[1].est_id.has_value());
   EXPECT_NE(alone[1].eval.note.find("fits another ground-truth object better"), std::string::npos)
       << alone[1].eval.note;
   EXPECT_EQ(alone[1].eval.coverage, 0.0);  // no estimate left for it covers anything
   // A ground-truth object never in view has an empty trajectory: said so, not "covers 30% of
   // its 0 timestamps".
-  const std::vector<ObjectEval> unseen = evaluateObjects({{5, Trajectory()}}, {{4, copy_a}}, {});
+  const std::vector<eval::ObjectEval> unseen =
+      eval::evaluateObjects({{5, Trajectory()}}, {{4, copy_a}}, {});
   EXPECT_FALSE(unseen[0].est_id.has_value());
   EXPECT_NE(unseen[0].eval.note.find("the ground truth has no poses"), std::string::npos)
       << unseen[0].eval.note;
@@ -373,35 +375,38 @@ TEST(Eval, TwoPosesGiveAnAteAsTheTumToolDoes) {
   gt.append(2.0, pose({1, 0, 0}, 0));
   est.append(1.0, pose({0, 0, 0}, 0));
   est.append(2.0, pose({1.1, 0, 0}, 0));
-  const AteResult ate = computeAte(gt, est);
+  const eval::AteResult ate = eval::computeAte(gt, est);
   EXPECT_EQ(ate.pairs, 2u);
   EXPECT_NEAR(ate.trans_m.rmse, 0.05, kExactTolM);
   // One pose: the message says the trajectory is too short, not that the clocks differ.
   Trajectory one;
   one.source = "camera.txt";
   one.append(1.0, pose({0, 0, 0}, 0));
-  expectErrorContaining([&] { computeAte(gt, one); }, {"'camera.txt' has only 1 pose"});
+  expectErrorContaining([&] { eval::computeAte(gt, one); }, {"'camera.txt' has only 1 pose"});
   Trajectory none;
   none.source = "empty.txt";
-  expectErrorContaining([&] { computeAte(gt, none); }, {"'empty.txt' has no poses"});
+  expectErrorContaining([&] { eval::computeAte(gt, none); }, {"'empty.txt' has no poses"});
 }
 
 TEST(Eval, BadInputsAreErrorsNamingFiles) {
   const std::string dir = test::tempDir("eval");
   writeText(dir + "/est.txt", "1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 0 1\n3.0 0 0 0 0 0 0\n");
-  expectErrorContaining([&] { evaluatePaths(refGt(), dir + "/est.txt", EvalOptions{}); },
-                        {dir + "/est.txt:3", "expected 8 fields"});
+  expectErrorContaining(
+      [&] { eval::evaluatePaths(refGt(), dir + "/est.txt", eval::EvalOptions{}); },
+      {dir + "/est.txt:3", "expected 8 fields"});
   writeText(dir + "/late.txt", "1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 0 1\n3.0 0 0 0 0 0 0 1\n");
-  expectErrorContaining([&] { evaluatePaths(refGt(), dir + "/late.txt", EvalOptions{}); },
-                        {"only 0 timestamps", "late.txt", "same clock"});
-  expectErrorContaining([&] { evaluatePaths(refGt(), dir, EvalOptions{}); }, {"has no camera.txt"});
-  expectErrorContaining([&] { evaluatePaths(dir, refEst(), EvalOptions{}); },
+  expectErrorContaining(
+      [&] { eval::evaluatePaths(refGt(), dir + "/late.txt", eval::EvalOptions{}); },
+      {"only 0 timestamps", "late.txt", "same clock"});
+  expectErrorContaining([&] { eval::evaluatePaths(refGt(), dir, eval::EvalOptions{}); },
+                        {"has no camera.txt"});
+  expectErrorContaining([&] { eval::evaluatePaths(dir, refEst(), eval::EvalOptions{}); },
                         {"has no groundtruth.txt"});
-  expectErrorContaining([&] { evaluatePaths(dir + "/nope", refEst(), EvalOptions{}); },
+  expectErrorContaining([&] { eval::evaluatePaths(dir + "/nope", refEst(), eval::EvalOptions{}); },
                         {"nope", "does not exist"});
   // A folder where a trajectory file should be.
   fs::create_directories(dir + "/g/groundtruth.txt");
-  expectErrorContaining([&] { evaluatePaths(dir + "/g", refEst(), EvalOptions{}); },
+  expectErrorContaining([&] { eval::evaluatePaths(dir + "/g", refEst(), eval::EvalOptions{}); },
                         {dir + "/g/groundtruth.txt' is a folder"});
   // Object files: two with the same id, an id beyond int.
   const std::string gt_dir = dir + "/gt", est_dir = dir + "/est";
@@ -412,11 +417,11 @@ TEST(Eval, BadInputsAreErrorsNamingFiles) {
   fs::copy_file(refEst(), est_dir + "/camera.txt");
   fs::copy_file(refEst(), est_dir + "/object-3.txt");
   fs::copy_file(refEst(), est_dir + "/object-03.txt");
-  expectErrorContaining([&] { evaluatePaths(gt_dir, est_dir, EvalOptions{}); },
+  expectErrorContaining([&] { eval::evaluatePaths(gt_dir, est_dir, eval::EvalOptions{}); },
                         {"object-3.txt", "object-03.txt", "both have id 3"});
   fs::remove(est_dir + "/object-03.txt");
   fs::copy_file(refEst(), est_dir + "/object-99999999999.txt");
-  expectErrorContaining([&] { evaluatePaths(gt_dir, est_dir, EvalOptions{}); },
+  expectErrorContaining([&] { eval::evaluatePaths(gt_dir, est_dir, eval::EvalOptions{}); },
                         {"object-99999999999.txt", "is too large"});
 }
 

@@ -13,6 +13,7 @@
 #include "common/error.h"
 #include "io/depth_image.h"
 #include "io_test_util.h"
+#include "sources/open_source.h"
 #include "test_support.h"
 
 namespace emf::io {
@@ -39,11 +40,11 @@ size_t filesIn(const std::string& dir) {
 
 TEST(Klg, RoundTripOfRealFramesIsBitExactForDepth) {
   // 7-Scenes depth is millimetres, the KLG unit: frames -> KLG -> frames is lossless.
-  auto tum =
-      openSource("tum:" + test::dataPath("redkitchen-0-299") + "?depth_scale=1000&max_frames=8",
-                 SourceOptions{});
-  std::vector<Frame> frames;
-  Frame f;
+  auto tum = sources::openSource(
+      "tum:" + test::dataPath("redkitchen-0-299") + "?depth_scale=1000&max_frames=8",
+      core::SourceOptions{});
+  std::vector<core::Frame> frames;
+  core::Frame f;
   while (tum->next(f)) frames.push_back(f);
   ASSERT_EQ(frames.size(), 8u);
   frames[3].color = cv::Mat();  // one frame without colour
@@ -56,7 +57,7 @@ TEST(Klg, RoundTripOfRealFramesIsBitExactForDepth) {
   w.close();
   EXPECT_EQ(filesIn(dir), 1u);
 
-  auto klg = openSource("klg:" + path + kIntrinsicsQuery, SourceOptions{});
+  auto klg = sources::openSource("klg:" + path + kIntrinsicsQuery, core::SourceOptions{});
   EXPECT_EQ(klg->size(), 8);
   EXPECT_EQ(klg->intrinsics().fx, 585);
   EXPECT_EQ(klg->intrinsics().width, 640);
@@ -76,7 +77,7 @@ TEST(Klg, RoundTripOfRealFramesIsBitExactForDepth) {
 }
 
 TEST(Klg, QuantisesToMillimetresAndMarksUnrepresentableDepthInvalid) {
-  Frame in;
+  core::Frame in;
   in.timestamp = 12.5;
   in.depth = cv::Mat(6, 8, CV_32FC1, cv::Scalar(1.23456f));
   in.depth.at<float>(0, 0) = std::numeric_limits<float>::quiet_NaN();
@@ -88,8 +89,9 @@ TEST(Klg, QuantisesToMillimetresAndMarksUnrepresentableDepthInvalid) {
   KlgWriter w(path);
   w.write(in);
   w.close();
-  auto s = openSource("klg:" + path + kIntrinsicsQuery + "&width=8&height=6", SourceOptions{});
-  Frame out;
+  auto s = sources::openSource("klg:" + path + kIntrinsicsQuery + "&width=8&height=6",
+                               core::SourceOptions{});
+  core::Frame out;
   ASSERT_TRUE(s->next(out));
   for (int x = 0; x < 4; ++x) EXPECT_TRUE(std::isnan(out.depth.at<float>(0, x))) << x;
   EXPECT_EQ(out.depth.at<float>(0, 4), static_cast<float>(65535 / 1000.0));
@@ -117,8 +119,9 @@ TEST(Klg, ReadsRawDepthAndRawRgbBlocks) {
     out.write(reinterpret_cast<const char*>(depth_mm.data), 24);
     out.write(reinterpret_cast<const char*>(rgb.data), 36);
   }
-  auto s = openSource("klg:" + path + kIntrinsicsQuery + "&width=4&height=3", SourceOptions{});
-  Frame f;
+  auto s = sources::openSource("klg:" + path + kIntrinsicsQuery + "&width=4&height=3",
+                               core::SourceOptions{});
+  core::Frame f;
   ASSERT_TRUE(s->next(f));
   EXPECT_TRUE(sameBits(f.depth, depthFromUnits(depth_mm, 1000.0)));
   EXPECT_EQ(f.color.at<cv::Vec3b>(1, 1), cv::Vec3b(50, 100, 200));  // BGR
@@ -129,11 +132,11 @@ TEST(Klg, WriterWithoutCloseLeavesNothingAndRejectsBadFrames) {
   const std::string dir = test::tempDir("klg");
   {
     KlgWriter w(dir + "/x.klg");
-    Frame f;
+    core::Frame f;
     f.depth = cv::Mat(6, 8, CV_32FC1, cv::Scalar(1.0f));
     f.timestamp = 1;
     w.write(f);
-    Frame g = f;
+    core::Frame g = f;
     expectErrorContaining([&] { w.write(g); }, {"frame 1", "not after the previous"});
     g.timestamp = 2;
     g.depth = cv::Mat(6, 9, CV_32FC1, cv::Scalar(1.0f));
@@ -150,7 +153,7 @@ TEST(Klg, BrokenFilesGiveErrorsNamingFrameAndOffset) {
   {
     KlgWriter w(path);
     for (int i = 0; i < 3; ++i) {
-      Frame f;
+      core::Frame f;
       f.timestamp = i;
       f.depth = cv::Mat(6, 8, CV_32FC1, cv::Scalar(1.0f + i));
       f.color = cv::Mat(6, 8, CV_8UC3, cv::Scalar(1, 2, 3));
@@ -168,9 +171,9 @@ TEST(Klg, BrokenFilesGiveErrorsNamingFrameAndOffset) {
       std::fstream patch(open_file, std::ios::in | std::ios::out | std::ios::binary);
       patch.write(reinterpret_cast<const char*>(&count), 4);
     }
-    auto s = openSource("klg:" + open_file + q, SourceOptions{});
+    auto s = sources::openSource("klg:" + open_file + q, core::SourceOptions{});
     EXPECT_EQ(s->size(), 3) << count;
-    Frame f;
+    core::Frame f;
     for (int i = 0; i < 3; ++i) {
       ASSERT_TRUE(s->next(f)) << count << " " << i;
       EXPECT_EQ(f.timestamp, i);
@@ -183,8 +186,8 @@ TEST(Klg, BrokenFilesGiveErrorsNamingFrameAndOffset) {
   fs::copy_file(path, cut);
   fs::resize_file(cut, fs::file_size(path) - 20);
   {
-    auto s = openSource("klg:" + cut + q, SourceOptions{});
-    Frame f;
+    auto s = sources::openSource("klg:" + cut + q, core::SourceOptions{});
+    core::Frame f;
     ASSERT_TRUE(s->next(f));
     ASSERT_TRUE(s->next(f));
     expectErrorContaining([&] { s->next(f); }, {cut, "frame 2", "bytes left in the file",
@@ -193,27 +196,28 @@ TEST(Klg, BrokenFilesGiveErrorsNamingFrameAndOffset) {
   // Cut inside a frame header.
   fs::resize_file(cut, 10);
   {
-    auto s = openSource("klg:" + cut + q, SourceOptions{});
-    Frame f;
+    auto s = sources::openSource("klg:" + cut + q, core::SourceOptions{});
+    core::Frame f;
     expectErrorContaining([&] { s->next(f); },
                           {cut, "frame 0", "file ends at byte 10", "timestamp", "truncated"});
   }
   // Wrong image size for the depth blocks.
   {
-    auto s = openSource("klg:" + path + kIntrinsicsQuery + "&width=640&height=480", {});
-    Frame f;
+    auto s = sources::openSource("klg:" + path + kIntrinsicsQuery + "&width=640&height=480", {});
+    core::Frame f;
     expectErrorContaining(
         [&] { s->next(f); },
         {"frame 0 (at byte 4)", "does not decompress to 640x480", "?width=&height="});
   }
-  expectErrorContaining([&] { openSource("klg:" + path, SourceOptions{}); },
+  expectErrorContaining([&] { sources::openSource("klg:" + path, core::SourceOptions{}); },
                         {"no intrinsics", "?fx=..&fy=..&cx=..&cy=.."});
-  expectErrorContaining([&] { openSource("klg:" + dir + "/none.klg" + q, SourceOptions{}); },
-                        {"none.klg", "does not exist"});
+  expectErrorContaining(
+      [&] { sources::openSource("klg:" + dir + "/none.klg" + q, core::SourceOptions{}); },
+      {"none.klg", "does not exist"});
   {
     const std::string empty = dir + "/empty.klg";
     std::ofstream(empty, std::ios::binary) << "ab";
-    expectErrorContaining([&] { openSource("klg:" + empty + q, SourceOptions{}); },
+    expectErrorContaining([&] { sources::openSource("klg:" + empty + q, core::SourceOptions{}); },
                           {"file ends at byte 2 while reading the frame count",
                            "not a KLG file (empty or truncated)"});
   }
@@ -223,7 +227,7 @@ TEST(Klg, BrokenFilesGiveErrorsNamingFrameAndOffset) {
     const int32_t count = -5;
     out.write(reinterpret_cast<const char*>(&count), 4);
     out.close();
-    expectErrorContaining([&] { openSource("klg:" + neg + q, SourceOptions{}); },
+    expectErrorContaining([&] { sources::openSource("klg:" + neg + q, core::SourceOptions{}); },
                           {"frame count -5 is negative"});
   }
 }

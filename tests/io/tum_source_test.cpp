@@ -11,6 +11,7 @@
 #include "io/depth_image.h"
 #include "io/trajectory.h"
 #include "io_test_util.h"
+#include "sources/open_source.h"
 #include "test_support.h"
 
 namespace emf::io {
@@ -46,11 +47,11 @@ int expectDepthMatchesRaw(const cv::Mat& depth, const std::string& png, double s
 
 // Reads every frame of a TUM folder and checks it against its files.
 void checkWholeFolder(const std::string& dir, const std::string& uri_query, double scale,
-                      size_t expected_frames, const Intrinsics& expected_k) {
+                      size_t expected_frames, const core::Intrinsics& expected_k) {
   const std::string uri = "tum:" + dir + uri_query;
-  auto source = openSource(uri, SourceOptions{});
+  auto source = sources::openSource(uri, core::SourceOptions{});
   EXPECT_EQ(source->size(), static_cast<int64_t>(expected_frames));
-  const Intrinsics k = source->intrinsics();
+  const core::Intrinsics k = source->intrinsics();
   EXPECT_EQ(k.fx, expected_k.fx);
   EXPECT_EQ(k.fy, expected_k.fy);
   EXPECT_EQ(k.cx, expected_k.cx);
@@ -68,7 +69,7 @@ void checkWholeFolder(const std::string& dir, const std::string& uri_query, doub
   ASSERT_EQ(assoc.size(), expected_frames);
   const Trajectory gt = readTrajectory(dir + "/groundtruth.txt");
 
-  Frame f;
+  core::Frame f;
   size_t n = 0;
   while (source->next(f)) {
     ASSERT_LT(n, expected_frames);
@@ -99,7 +100,7 @@ void checkWholeFolder(const std::string& dir, const std::string& uri_query, doub
 }
 
 TEST(TumSource, ReadsAllOfRedkitchen) {
-  Intrinsics k;
+  core::Intrinsics k;
   k.fx = k.fy = 585;
   k.cx = 320;
   k.cy = 240;
@@ -107,7 +108,7 @@ TEST(TumSource, ReadsAllOfRedkitchen) {
 }
 
 TEST(TumSource, ReadsAllOfFr3CabinetKeyframes) {
-  Intrinsics k;
+  core::Intrinsics k;
   k.fx = 535.4;
   k.fy = 539.2;
   k.cx = 320.1;
@@ -153,13 +154,13 @@ TEST(DepthScaleWarning, SilentAtTheRightScaleOnRealFramesAndSpeaksAtTheWrongOne)
 }
 
 TEST(TumSource, QueryOverridesCalibrationAndLimitsFrames) {
-  auto s = openSource("tum:" + test::dataPath("tum-fr3-cabinet-keyframes") +
-                          "?fx=500&fy=501&cx=300&cy=200&max_frames=3",
-                      SourceOptions{});
+  auto s = sources::openSource("tum:" + test::dataPath("tum-fr3-cabinet-keyframes") +
+                                   "?fx=500&fy=501&cx=300&cy=200&max_frames=3",
+                               core::SourceOptions{});
   EXPECT_EQ(s->intrinsics().fx, 500);
   EXPECT_EQ(s->intrinsics().cy, 200);
   EXPECT_EQ(s->size(), 3);
-  Frame f;
+  core::Frame f;
   int n = 0;
   while (s->next(f)) ++n;
   EXPECT_EQ(n, 3);
@@ -234,13 +235,13 @@ TEST(TumSource, AssociatesLikeAssociatePyWithoutAssociationsFile) {
   // (1.040, 1.035) .005. Greedy by difference: (1.040, 1.035), then (1.020, 1.011); 1.000 and
   // 1.100 stay without colour and are skipped.
   MiniFolder m({"1.000", "1.020", "1.040", "1.100"}, {"1.011", "1.035"});
-  TumSource s(m.dir, SourceOptions{});
+  TumSource s(m.dir, core::SourceOptions{});
   ASSERT_EQ(s.entries().size(), 2u);
   EXPECT_EQ(s.entries()[0].depth_stamp_text, "1.020");
   EXPECT_EQ(s.entries()[0].rgb_file, "rgb/1.011.png");
   EXPECT_EQ(s.entries()[1].depth_stamp_text, "1.040");
   EXPECT_EQ(s.entries()[1].rgb_file, "rgb/1.035.png");
-  Frame f;
+  core::Frame f;
   ASSERT_TRUE(s.next(f));
   EXPECT_TRUE(std::isnan(f.depth.at<float>(0, 0)));
   EXPECT_EQ(f.depth.at<float>(1, 1), static_cast<float>(2000 / 5000.0));
@@ -264,8 +265,8 @@ TEST(TumSource, AttachesDetectionsAndInterpolatedGroundTruth) {
   // Ground truth at 1.015 and 1.04: frame 1 (1.033333) is interpolated; frame 0 (1.0) has only
   // the 1.015 pose within 0.02 s: nearest.
   writeText(m.dir + "/groundtruth.txt", "1.015 0 0 0 0 0 0 1\n1.04 2 0 0 0 0 0 1\n");
-  auto s = openSource("tum:" + m.dir, SourceOptions{});
-  Frame f0, f1;
+  auto s = sources::openSource("tum:" + m.dir, core::SourceOptions{});
+  core::Frame f0, f1;
   ASSERT_TRUE(s->next(f0));
   ASSERT_TRUE(s->next(f1));
   EXPECT_FALSE(f0.detections.has_value());
@@ -295,17 +296,17 @@ TEST(TumSource, WarnsWhenMasksMatchNoFrameOrTheDepthScaleLooksWrong) {
   ASSERT_TRUE(cv::imwrite(m.dir + "/masks/1.0333330.png", ids));
   writeText(m.dir + "/masks/1.0333330.txt", "1 cup 0.8\n");
   {
-    TumSource s(m.dir, SourceOptions{});
+    TumSource s(m.dir, core::SourceOptions{});
     EXPECT_TRUE(anyContains(s.openWarnings(), kNoMatch));
     EXPECT_TRUE(anyContains(s.openWarnings(), "first frame: '1.000000.txt'"));
   }
   // One list that matches a frame: no warning.
   ASSERT_TRUE(cv::imwrite(m.dir + "/masks/1.033333.png", ids));
   writeText(m.dir + "/masks/1.033333.txt", "1 cup 0.8\n");
-  EXPECT_FALSE(anyContains(TumSource(m.dir, SourceOptions{}).openWarnings(), kNoMatch));
+  EXPECT_FALSE(anyContains(TumSource(m.dir, core::SourceOptions{}).openWarnings(), kNoMatch));
   // The 7-Scenes millimetres read at the default 5000 units per metre, and at their own scale.
   const std::string kitchen = test::dataPath("redkitchen-0-299");
-  SourceOptions options;
+  core::SourceOptions options;
   options.max_frames = 1;
   EXPECT_TRUE(anyContains(TumSource(kitchen, options).openWarnings(), "?depth_scale=1000"));
   options.depth_scale = 1000;
@@ -316,8 +317,8 @@ TEST(TumSource, BrokenFoldersGiveErrorsNamingFileAndLine) {
   {
     MiniFolder m({"1.0", "2.0"}, {"1.0", "2.0"});
     fs::remove(m.dir + "/depth/2.0.png");
-    auto s = openSource("tum:" + m.dir, SourceOptions{});
-    Frame f;
+    auto s = sources::openSource("tum:" + m.dir, core::SourceOptions{});
+    core::Frame f;
     ASSERT_TRUE(s->next(f));
     expectErrorContaining([&] { s->next(f); },
                           {m.dir + "/depth.txt:4", "depth/2.0.png", "does not exist"});
@@ -325,8 +326,8 @@ TEST(TumSource, BrokenFoldersGiveErrorsNamingFileAndLine) {
   {
     MiniFolder m({"1.0", "2.0"}, {"1.0", "2.0"});
     ASSERT_TRUE(cv::imwrite(m.dir + "/depth/2.0.png", cv::Mat(kSmall, CV_8UC1, cv::Scalar(9))));
-    auto s = openSource("tum:" + m.dir, SourceOptions{});
-    Frame f;
+    auto s = sources::openSource("tum:" + m.dir, core::SourceOptions{});
+    core::Frame f;
     ASSERT_TRUE(s->next(f));
     expectErrorContaining([&] { s->next(f); },
                           {"depth.txt:4", "8-bit 1-channel", "expected a 16-bit single-channel"});
@@ -334,50 +335,51 @@ TEST(TumSource, BrokenFoldersGiveErrorsNamingFileAndLine) {
   {
     MiniFolder m({"1.0", "2.0"}, {"1.0", "2.0"});
     ASSERT_TRUE(cv::imwrite(m.dir + "/depth/2.0.png", cv::Mat(4, 4, CV_16UC1, cv::Scalar(9))));
-    auto s = openSource("tum:" + m.dir, SourceOptions{});
-    Frame f;
+    auto s = sources::openSource("tum:" + m.dir, core::SourceOptions{});
+    core::Frame f;
     ASSERT_TRUE(s->next(f));
     expectErrorContaining([&] { s->next(f); }, {"depth.txt:4", "is 4x4", "8x6", "same size"});
   }
   {
     MiniFolder m({"1.0", "2.0"}, {"1.0", "2.0"});
     writeText(m.dir + "/depth.txt", "2.0 depth/2.0.png\n1.0 depth/1.0.png\n");
-    expectErrorContaining([&] { openSource("tum:" + m.dir, SourceOptions{}); },
+    expectErrorContaining([&] { sources::openSource("tum:" + m.dir, core::SourceOptions{}); },
                           {m.dir + "/depth.txt:2", "not after the previous one"});
   }
   {
     MiniFolder m({"1.0", "2.0"}, {"1.0", "2.0"});
     writeText(m.dir + "/rgb.txt", "1.0 rgb/1.0.png\n2.O rgb/2.0.png\n");
-    expectErrorContaining([&] { openSource("tum:" + m.dir, SourceOptions{}); },
+    expectErrorContaining([&] { sources::openSource("tum:" + m.dir, core::SourceOptions{}); },
                           {m.dir + "/rgb.txt:2", "timestamp '2.O' is not a number"});
   }
   {
     MiniFolder m({"1.0", "2.0"}, {"1.0", "2.0"});
     writeText(m.dir + "/rgb.txt", "1.0 rgb/1.0.png extra\n");
-    expectErrorContaining([&] { openSource("tum:" + m.dir, SourceOptions{}); },
+    expectErrorContaining([&] { sources::openSource("tum:" + m.dir, core::SourceOptions{}); },
                           {m.dir + "/rgb.txt:1", "expected 2 fields"});
   }
   {
     MiniFolder m({"1.0", "2.0"}, {"1.0", "2.0"});
     writeText(m.dir + "/groundtruth.txt", "# gt\n1.0 0 0 0 0 0 0 1\n2.0 0 NaN 0 0 0 0 1\n");
-    expectErrorContaining([&] { openSource("tum:" + m.dir, SourceOptions{}); },
+    expectErrorContaining([&] { sources::openSource("tum:" + m.dir, core::SourceOptions{}); },
                           {m.dir + "/groundtruth.txt:3", "NaN"});
   }
   {
     MiniFolder m({"1.0", "2.0"}, {"1.0", "2.0"});
     writeText(m.dir + "/associations.txt", "1.0 rgb/1.0.png 1.0\n");
     expectErrorContaining(
-        [&] { openSource("tum:" + m.dir, SourceOptions{}); },
+        [&] { sources::openSource("tum:" + m.dir, core::SourceOptions{}); },
         {m.dir + "/associations.txt:1", "expected 4 fields", "t_rgb rgb_file t_depth depth_file"});
   }
   {
     MiniFolder m({"1.0", "2.0"}, {"1.0", "2.0"}, /*calibration=*/false);
     expectErrorContaining(
-        [&] { openSource("tum:" + m.dir, SourceOptions{}); },
+        [&] { sources::openSource("tum:" + m.dir, core::SourceOptions{}); },
         {"no intrinsics", "calibration.txt", "?fx=..&fy=..&cx=..&cy=..", "not guessed"});
-    expectErrorContaining([&] { openSource("tum:" + m.dir + "?fx=500&fy=500&cx=4", {}); },
+    expectErrorContaining([&] { sources::openSource("tum:" + m.dir + "?fx=500&fy=500&cx=4", {}); },
                           {"missing: cy"});
-    auto s = openSource("tum:" + m.dir + "?fx=500&fy=501&cx=4&cy=3", SourceOptions{});
+    auto s =
+        sources::openSource("tum:" + m.dir + "?fx=500&fy=501&cx=4&cy=3", core::SourceOptions{});
     EXPECT_EQ(s->intrinsics().fy, 501);
   }
   {
@@ -385,30 +387,30 @@ TEST(TumSource, BrokenFoldersGiveErrorsNamingFileAndLine) {
     // unbounded): the error names the file.
     MiniFolder m({"1.0", "2.0"}, {"1.0", "2.0"});
     writeText(m.dir + "/calibration.txt", "10 11 1e9 3 8 6\n");
-    expectErrorContaining([&] { openSource("tum:" + m.dir, SourceOptions{}); },
+    expectErrorContaining([&] { sources::openSource("tum:" + m.dir, core::SourceOptions{}); },
                           {m.dir + "/calibration.txt", "cx=1e+09", "principal point"});
     writeText(m.dir + "/calibration.txt", "0.1 11 4 3 8 6\n");
-    expectErrorContaining([&] { openSource("tum:" + m.dir, SourceOptions{}); },
+    expectErrorContaining([&] { sources::openSource("tum:" + m.dir, core::SourceOptions{}); },
                           {m.dir + "/calibration.txt", "1/20 of the image side"});
   }
   {
     MiniFolder m({"1.0"}, {"1.0"});
     writeText(m.dir + "/calibration.txt", "10 11 4 3 640 480\n");
-    expectErrorContaining([&] { openSource("tum:" + m.dir, SourceOptions{}); },
+    expectErrorContaining([&] { sources::openSource("tum:" + m.dir, core::SourceOptions{}); },
                           {"calibration.txt", "640x480", "8x6"});
   }
   {
     const std::string dir = test::tempDir("tum");
-    expectErrorContaining([&] { openSource("tum:" + dir, SourceOptions{}); },
+    expectErrorContaining([&] { sources::openSource("tum:" + dir, core::SourceOptions{}); },
                           {"not a TUM RGB-D folder", "associations.txt nor depth.txt"});
   }
   {
     // No rgb frame near any depth frame: said so (it used to say depth.txt is empty).
     MiniFolder m({"1.000", "2.000"}, {"5.000"});
-    expectErrorContaining([&] { openSource("tum:" + m.dir, SourceOptions{}); },
+    expectErrorContaining([&] { sources::openSource("tum:" + m.dir, core::SourceOptions{}); },
                           {"none of the 2 depth frames", "rgb.txt", "same clock"});
     // A 0 s association window could never match (associate.py compares with <).
-    expectErrorContaining([&] { openSource("tum:" + m.dir + "?max_time_diff_s=0", {}); },
+    expectErrorContaining([&] { sources::openSource("tum:" + m.dir + "?max_time_diff_s=0", {}); },
                           {"max_time_diff_s"});
   }
 }

@@ -1,15 +1,16 @@
 // Source URIs: parsing, typed query values, SourceOptions overrides, scheme dispatch.
-#include "io/uri.h"
+#include "sources/uri.h"
 
 #include "common/error.h"
-#include "io/frame_source.h"
+#include "core/frame_source.h"
 #include "io_test_util.h"
+#include "sources/open_source.h"
 #include "test_support.h"
 
-namespace emf::io {
+namespace emf::sources {
 namespace {
 
-using testing::expectErrorContaining;
+using io::testing::expectErrorContaining;
 
 TEST(Uri, ParsesSchemePathAndQuery) {
   const Uri u = parseUri("TUM:/data/fr3 walking?depth_scale=1000&fx=585.5");
@@ -58,11 +59,11 @@ TEST(UriQuery, TypedValuesAndRanges) {
 }
 
 TEST(UriQuery, OverridesSourceOptionsWithConfigRanges) {
-  SourceOptions base;
+  core::SourceOptions base;
   base.fx = 500;
   base.cy = 10;
   const Uri u = parseUri("tum:/x?depth_scale=1000&fx=585&max_frames=12&max_time_diff_s=0.05");
-  const SourceOptions o = applySourceQuery(UriQuery(u, sourceQueryKeys()), base);
+  const core::SourceOptions o = applySourceQuery(UriQuery(u, sourceQueryKeys()), base);
   EXPECT_EQ(o.depth_scale, 1000.0);
   EXPECT_EQ(o.fx, 585.0);
   EXPECT_EQ(o.cy, 10.0);  // not in the query: kept
@@ -77,7 +78,7 @@ TEST(UriQuery, OverridesSourceOptionsWithConfigRanges) {
 }
 
 TEST(OpenSource, DispatchErrorsSayWhatToDo) {
-  const SourceOptions o;
+  const core::SourceOptions o;
   expectErrorContaining([&] { openSource("foo:/x", o); }, {"unknown scheme 'foo:'", "tum:<dir>"});
   // synth: and the sensors are dispatched to their modules, which name what is wrong.
   expectErrorContaining([&] { openSource("synth:nosuchpreset", o); },
@@ -96,4 +97,4 @@ TEST(OpenSource, DispatchErrorsSayWhatToDo) {
 }
 
 }  // namespace
-}  // namespace emf::io
+}  // namespace emf::sources

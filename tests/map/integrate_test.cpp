@@ -19,7 +19,7 @@ TEST_F(Integration, AllocationMarksTheTruncationBandAsTheReference) {
   const map::VolumeSpec spec = map::VolumeSpec::background(o);
   const Eigen::Isometry3d T_wc = Eigen::Isometry3d::Identity();
   map::Volume vol(pool, spec, map::backgroundVolumePose(o, spec, T_wc));
-  const io::Intrinsics k = testIntrinsics(320, 240);
+  const core::Intrinsics k = testIntrinsics(320, 240);
   const Scene scene;
   Frame f = makeFrame(renderDepth(scene, k, T_wc), k, T_wc);
   const map::AllocationReport rep = vol.allocate(f.input);
@@ -59,7 +59,7 @@ TEST_F(Integration, PlainFusionMatchesReferenceOverSeveralViews) {
   const map::VolumeSpec spec = map::VolumeSpec::background(o);
   const Eigen::Isometry3d T_w0 = Eigen::Isometry3d::Identity();
   map::Volume vol(pool, spec, map::backgroundVolumePose(o, spec, T_w0));
-  const io::Intrinsics k = testIntrinsics(320, 240);
+  const core::Intrinsics k = testIntrinsics(320, 240);
   const Scene scene;
   const Eigen::Isometry3d poses[] = {
       T_w0, lookAt(Eigen::Vector3d(0.4, -0.1, 0.2), Eigen::Vector3d(0.0, 0.3, 2.0)),
@@ -89,7 +89,7 @@ TEST_F(Integration, AssociationWeightsAndFreeSpaceRuleMatchReference) {
     const map::VolumeSpec spec = map::VolumeSpec::background(o);
     const Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
     map::Volume vol(pool, spec, map::backgroundVolumePose(o, spec, T));
-    const io::Intrinsics k = testIntrinsics(320, 240);
+    const core::Intrinsics k = testIntrinsics(320, 240);
     const Scene scene;
     // q: 0 on the left third, a ramp elsewhere.
     cv::Mat q(k.height, k.width, CV_32FC1);
@@ -143,7 +143,7 @@ TEST_F(Integration, WeightCapAndRunningAverage) {
   const map::VolumeSpec spec = map::VolumeSpec::background(o);
   const Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   map::Volume vol(pool, spec, map::backgroundVolumePose(o, spec, T));
-  const io::Intrinsics k = testIntrinsics(160, 120);
+  const core::Intrinsics k = testIntrinsics(160, 120);
   const Scene scene;
   Frame f = makeFrame(renderDepth(scene, k, T), k, T);
   map::VolumeHostData h;
@@ -166,7 +166,7 @@ TEST_F(Integration, ForegroundCountsFromDetectionMaskMatchReference) {
   Eigen::Isometry3d T_wv = Eigen::Isometry3d::Identity();
   T_wv.translation() = s.centre_w - Eigen::Vector3d::Constant(0.48);
   map::Volume vol(pool, spec, T_wv);
-  const io::Intrinsics k = testIntrinsics(320, 240);
+  const core::Intrinsics k = testIntrinsics(320, 240);
   const Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   const cv::Mat depth = renderDepth(scene, k, T);
   // Mask: 1 on the sphere, 0 elsewhere, NaN (occluded, no update) on a vertical strip.
@@ -228,7 +228,7 @@ TEST_F(Integration, RealKinectFrameMatchesReferenceAndMeasuredSurface) {
   const map::VolumeSpec spec = map::VolumeSpec::background(o);
   const Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   map::Volume vol(pool, spec, map::backgroundVolumePose(o, spec, T));
-  const io::Intrinsics k = testIntrinsics(320, 240);
+  const core::Intrinsics k = testIntrinsics(320, 240);
   Frame f = makeFrame(small, k, T);
   map::VolumeHostData h;
   EXPECT_EQ(fuseAndCompare(vol, f, &h), 0);

@@ -39,7 +39,7 @@ class MapTest : public WithClQueue {
     map::IntegrationInput input;
   };
 
-  Frame makeFrame(const cv::Mat& depth, const io::Intrinsics& k, const Eigen::Isometry3d& T_wc,
+  Frame makeFrame(const cv::Mat& depth, const core::Intrinsics& k, const Eigen::Isometry3d& T_wc,
                   const cv::Mat& weights = cv::Mat(), const cv::Mat& mask = cv::Mat()) {
     Frame f;
     f.depth = std::make_unique<map::DeviceImage>(ctx(), k.width, k.height);

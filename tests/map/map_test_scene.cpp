@@ -5,8 +5,8 @@
 
 namespace emf::test {
 
-io::Intrinsics testIntrinsics(int width, int height) {
-  io::Intrinsics k;
+core::Intrinsics testIntrinsics(int width, int height) {
+  core::Intrinsics k;
   k.fx = k.fy = 585.0;
   k.cx = 320.0;
   k.cy = 240.0;
@@ -15,7 +15,7 @@ io::Intrinsics testIntrinsics(int width, int height) {
   return (width == 640 && height == 480) ? k : k.scaled(width, height);
 }
 
-map::CameraF cameraF(const io::Intrinsics& k) {
+map::CameraF cameraF(const core::Intrinsics& k) {
   map::CameraF c;
   c.fx = static_cast<float>(k.fx);
   c.fy = static_cast<float>(k.fy);
@@ -47,7 +47,7 @@ double hitSphere(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Spher
 }
 
 cv::Mat render(const Scene& scene, bool walls, const std::vector<int>& which,
-               const io::Intrinsics& k, const Eigen::Isometry3d& T_world_camera) {
+               const core::Intrinsics& k, const Eigen::Isometry3d& T_world_camera) {
   cv::Mat depth(k.height, k.width, CV_32FC1);
   const Eigen::Matrix3d R = T_world_camera.rotation();
   const Eigen::Vector3d o = T_world_camera.translation();
@@ -71,19 +71,19 @@ cv::Mat render(const Scene& scene, bool walls, const std::vector<int>& which,
 
 }  // namespace
 
-cv::Mat renderDepth(const Scene& scene, const io::Intrinsics& k,
+cv::Mat renderDepth(const Scene& scene, const core::Intrinsics& k,
                     const Eigen::Isometry3d& T_world_camera) {
   std::vector<int> all;
   for (size_t i = 0; i < scene.spheres.size(); ++i) all.push_back(static_cast<int>(i));
   return render(scene, true, all, k, T_world_camera);
 }
 
-cv::Mat renderSpheres(const Scene& scene, const std::vector<int>& which, const io::Intrinsics& k,
+cv::Mat renderSpheres(const Scene& scene, const std::vector<int>& which, const core::Intrinsics& k,
                       const Eigen::Isometry3d& T_world_camera) {
   return render(scene, false, which, k, T_world_camera);
 }
 
-cv::Mat sphereMask(const Scene& scene, int which, const io::Intrinsics& k,
+cv::Mat sphereMask(const Scene& scene, int which, const core::Intrinsics& k,
                    const Eigen::Isometry3d& T_world_camera) {
   const cv::Mat depth = renderDepth(scene, k, T_world_camera);
   const cv::Mat sphere_only = renderSpheres(scene, {which}, k, T_world_camera);

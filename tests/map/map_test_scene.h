@@ -6,7 +6,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-#include "io/frame.h"
+#include "core/frame.h"
 #include "map/map_math.h"
 
 namespace emf::test {
@@ -26,18 +26,18 @@ struct Scene {
 };
 
 /// Kinect-like intrinsics (fx = fy = 585 at 640x480) at width x height.
-io::Intrinsics testIntrinsics(int width, int height);
-map::CameraF cameraF(const io::Intrinsics& k);
+core::Intrinsics testIntrinsics(int width, int height);
+map::CameraF cameraF(const core::Intrinsics& k);
 
 /// Exact z-depth of the scene (metres; NaN where nothing within 10 m).
-cv::Mat renderDepth(const Scene& scene, const io::Intrinsics& k,
+cv::Mat renderDepth(const Scene& scene, const core::Intrinsics& k,
                     const Eigen::Isometry3d& T_world_camera);
 /// Exact z-depth of only the spheres listed in `which` (NaN elsewhere).
-cv::Mat renderSpheres(const Scene& scene, const std::vector<int>& which, const io::Intrinsics& k,
+cv::Mat renderSpheres(const Scene& scene, const std::vector<int>& which, const core::Intrinsics& k,
                       const Eigen::Isometry3d& T_world_camera);
 
 /// Detection mask of sphere `which`: 1 where it is the visible surface, 0 elsewhere (CV_32F).
-cv::Mat sphereMask(const Scene& scene, int which, const io::Intrinsics& k,
+cv::Mat sphereMask(const Scene& scene, int which, const core::Intrinsics& k,
                    const Eigen::Isometry3d& T_world_camera);
 
 /// A camera pose: position in the world, looking at `target` (y down).

@@ -46,7 +46,7 @@ TEST_F(Raycast, BackgroundMatchesReferenceAndTheScene) {
   const map::VolumeSpec spec = map::VolumeSpec::background(o);
   const Eigen::Isometry3d T0 = Eigen::Isometry3d::Identity();
   map::Volume vol(pool, spec, map::backgroundVolumePose(o, spec, T0));
-  const io::Intrinsics k = testIntrinsics(320, 240);
+  const core::Intrinsics k = testIntrinsics(320, 240);
   const Scene scene;
   const Eigen::Isometry3d T1 = lookAt(Eigen::Vector3d(0.3, -0.1, 0.2), Eigen::Vector3d(0, 0.3, 2));
   for (const auto& T : {T0, T1}) {
@@ -132,7 +132,7 @@ TEST_F(Raycast, SeveralVolumesDepthTestAndForegroundRule) {
     objects.push_back(
         std::make_unique<map::Volume>(pool, map::VolumeSpec::object(o, 64, 0.015f), T_wv));
   }
-  const io::Intrinsics k = testIntrinsics(320, 240);
+  const core::Intrinsics k = testIntrinsics(320, 240);
   const cv::Mat depth0 = renderDepth(scene, k, T0);
   const cv::Mat s0 = renderSpheres(scene, {0}, k, T0);
   cv::Mat mask0(k.height, k.width, CV_32FC1), mask1(k.height, k.width, CV_32FC1, cv::Scalar(0));

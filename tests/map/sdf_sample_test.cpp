@@ -94,7 +94,7 @@ TEST_F(SdfSampling, DeviceMatchesReferenceAcrossBlockBorders) {
   Eigen::Isometry3d T_wv = Eigen::Isometry3d::Identity();
   T_wv.translation() = s.centre_w - Eigen::Vector3d::Constant(0.48);
   map::Volume vol(pool, spec, T_wv);
-  const io::Intrinsics k = testIntrinsics(320, 240);
+  const core::Intrinsics k = testIntrinsics(320, 240);
   const cv::Mat sphere_only = renderSpheres(scene, {1}, k, Eigen::Isometry3d::Identity());
   cv::Mat mask(k.height, k.width, CV_32FC1);
   for (int y = 0; y < k.height; ++y) {
@@ -180,7 +180,7 @@ TEST_F(SdfSampling, SampledSdfIsTheDistanceToTheSurface) {
   Eigen::Isometry3d T_wv = Eigen::Isometry3d::Identity();
   T_wv.translation() = s.centre_w - Eigen::Vector3d::Constant(0.48);
   map::Volume vol(pool, spec, T_wv);
-  const io::Intrinsics k = testIntrinsics(320, 240);
+  const core::Intrinsics k = testIntrinsics(320, 240);
   const Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   Frame f = makeFrame(renderSpheres(scene, {0}, k, T), k, T);
   vol.fuse(f.input);

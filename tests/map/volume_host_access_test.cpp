@@ -25,7 +25,7 @@ TEST_F(VolumeHostAccessTest, MappedAndDownloadedVolumesGiveTheSameMesh) {
   const map::MapOptions o = smallOptions();
   map::VoxelPool pool(ctx(), o);
   const Scene scene;
-  const io::Intrinsics k = testIntrinsics(320, 240);
+  const core::Intrinsics k = testIntrinsics(320, 240);
   const Eigen::Isometry3d T0 = Eigen::Isometry3d::Identity();
 
   // Background: three views.

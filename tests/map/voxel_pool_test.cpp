@@ -52,7 +52,7 @@ TEST_F(Pool, ExhaustionAllocatesWhatFitsCountsTheRestAndCorruptsNothing) {
   const map::VolumeSpec spec = map::VolumeSpec::background(o);
   const Eigen::Isometry3d T0 = Eigen::Isometry3d::Identity();
   map::Volume vol(pool, spec, map::backgroundVolumePose(o, spec, T0));
-  const io::Intrinsics k = testIntrinsics(160, 120);
+  const core::Intrinsics k = testIntrinsics(160, 120);
   const Scene scene;
   const Eigen::Isometry3d poses[] = {
       T0, lookAt(Eigen::Vector3d(0.5, -0.2, 0.3), Eigen::Vector3d(-0.2, 0.5, 2.5)),
@@ -123,7 +123,7 @@ TEST_F(Pool, ObjectBlocksTakeTwoSlotsAndAnOddLastSlotIsNotSplit) {
   Eigen::Isometry3d T_wv = Eigen::Isometry3d::Identity();
   T_wv.translation() = scene.spheres[1].centre_w - Eigen::Vector3d::Constant(0.48);
   map::Volume vol(pool, spec, T_wv);
-  const io::Intrinsics k = testIntrinsics(160, 120);
+  const core::Intrinsics k = testIntrinsics(160, 120);
   Frame f = makeFrame(renderDepth(scene, k, Eigen::Isometry3d::Identity()), k,
                       Eigen::Isometry3d::Identity());
   const map::AllocationReport rep = vol.allocate(f.input);
@@ -148,7 +148,7 @@ TEST_F(Pool, DestroyingAVolumeReturnsItsSlots) {
   const map::MapOptions o = options2cm();
   map::VoxelPool pool(ctx(), o);
   const Scene scene;
-  const io::Intrinsics k = testIntrinsics(160, 120);
+  const core::Intrinsics k = testIntrinsics(160, 120);
   const Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   Frame f = makeFrame(renderDepth(scene, k, T), k, T);
   const map::VolumeSpec spec = map::VolumeSpec::background(o);
@@ -169,7 +169,7 @@ TEST_F(Pool, BadFramesAreRejectedWithAMessage) {
   map::VoxelPool pool(ctx(), o);
   const map::VolumeSpec spec = map::VolumeSpec::background(o);
   map::Volume vol(pool, spec, Eigen::Isometry3d::Identity());
-  const io::Intrinsics small = testIntrinsics(160, 120);
+  const core::Intrinsics small = testIntrinsics(160, 120);
   Frame f = makeFrame(cv::Mat(small.height, small.width, CV_32FC1, cv::Scalar(1.0f)), small,
                       Eigen::Isometry3d::Identity());
   map::IntegrationInput in = f.input;
@@ -202,15 +202,21 @@ TEST_F(Pool, GrowReindexesWithoutMovingVoxels) {
   Eigen::Isometry3d T_wv = Eigen::Isometry3d::Identity();
   T_wv.translation() = s.centre_w - Eigen::Vector3d(0.2, 0.2, 0.5);
   map::Volume vol(pool, spec, T_wv);
-  const io::Intrinsics k = testIntrinsics(160, 120);
+  const core::Intrinsics k = testIntrinsics(160, 120);
   const Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   Frame f = makeFrame(renderDepth(scene, k, T), k, T);
   vol.fuse(f.input);
   const map::VolumeHostData h0 = vol.download();
   const int used0 = pool.stats().used_slots;
+  const uint64_t key0 = vol.key();
+  const cl_mem index0 = vol.index().get();
 
   const Eigen::Vector3i low(1, 2, 0), high(0, 1, 3);
   vol.grow(low, high);
+  // A new index buffer, the same key (what per-volume state across frames is keyed by).
+  EXPECT_NE(vol.index().get(), index0);
+  EXPECT_EQ(vol.key(), key0);
+  EXPECT_NE(map::Volume(pool, spec, T_wv).key(), key0);
   EXPECT_EQ(vol.spec().dims_blocks, Eigen::Vector3i(5, 7, 7));
   EXPECT_EQ(pool.stats().used_slots, used0);  // no voxel copied, no slot taken
   const map::VolumeHostData h1 = vol.download();

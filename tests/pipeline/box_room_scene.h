@@ -7,45 +7,44 @@
 #include <opencv2/imgproc.hpp>
 #include <string>
 
-#include "common/config.h"
-#include "io/frame.h"
-#include "io/synth/scene.h"
+#include "core/frame.h"
+#include "pipeline/config.h"
+#include "synth/scene.h"
 
 namespace emf::pipeline::test_scene {
 
-inline io::synth::Material solidMaterial(float r, float g, float b) {
-  return {{r, g, b}, {r, g, b}, io::synth::Texture::kSolid, 1.0};
+inline synth::Material solidMaterial(float r, float g, float b) {
+  return {{r, g, b}, {r, g, b}, synth::Texture::kSolid, 1.0};
 }
 
 /// The room with the box (object `box_id`, class "box") at (x, y) on the floor.
-inline io::synth::Scene boxRoomScene(const std::string& name, int box_id, double box_x,
-                                     double box_y) {
-  using io::synth::at;
-  io::synth::Scene s;
+inline synth::Scene boxRoomScene(const std::string& name, int box_id, double box_x, double box_y) {
+  using synth::at;
+  synth::Scene s;
   s.name = name;
-  const io::synth::Material floor{
-      {0.3f, 0.45f, 0.6f}, {0.5f, 0.6f, 0.75f}, io::synth::Texture::kTiles, 0.4};
-  const io::synth::Material walls{
-      {0.8f, 0.85f, 0.88f}, {0.55f, 0.66f, 0.74f}, io::synth::Texture::kNoise, 0.3};
-  const io::synth::Material solid = solidMaterial(0.3f, 0.3f, 0.7f);
-  s.statics.push_back(io::synth::makePlane(at(0, 0, 0), floor));
-  s.statics.push_back(io::synth::makeRoom({3.0, 2.5, 1.5}, at(0, 0.5, 1.3), walls));
+  const synth::Material floor{
+      {0.3f, 0.45f, 0.6f}, {0.5f, 0.6f, 0.75f}, synth::Texture::kTiles, 0.4};
+  const synth::Material walls{
+      {0.8f, 0.85f, 0.88f}, {0.55f, 0.66f, 0.74f}, synth::Texture::kNoise, 0.3};
+  const synth::Material solid = solidMaterial(0.3f, 0.3f, 0.7f);
+  s.statics.push_back(synth::makePlane(at(0, 0, 0), floor));
+  s.statics.push_back(synth::makeRoom({3.0, 2.5, 1.5}, at(0, 0.5, 1.3), walls));
   for (int i = 0; i < 5; ++i) {
-    s.statics.push_back(io::synth::makeBox({0.15, 0.15, 0.3 + 0.1 * i},
-                                           at(-1.2 + 0.8 * i, 2.2, 0.3 + 0.1 * i, 0.3 * i), solid));
+    s.statics.push_back(synth::makeBox({0.15, 0.15, 0.3 + 0.1 * i},
+                                       at(-1.2 + 0.8 * i, 2.2, 0.3 + 0.1 * i, 0.3 * i), solid));
   }
-  io::synth::SceneObject box;
+  synth::SceneObject box;
   box.id = box_id;
   box.class_name = "box";
-  box.parts.push_back(io::synth::makeBox({0.2, 0.2, 0.2}, at(0, 0, 0.2), solid));
+  box.parts.push_back(synth::makeBox({0.2, 0.2, 0.2}, at(0, 0, 0.2), solid));
   box.trajectory.origin_m = Eigen::Vector3d(box_x, box_y, 0);
   s.objects.push_back(box);
   return s;
 }
 
 /// Object `id`'s exact silhouette in a synthetic frame as a detection of class "box".
-inline io::Detection exactDetection(const io::Frame& f, int id) {
-  io::Detection det;
+inline core::Detection exactDetection(const core::Frame& f, int id) {
+  core::Detection det;
   det.id = 1;
   det.class_name = "box";
   det.score = 1.0f;

@@ -13,10 +13,10 @@ namespace {
 
 constexpr double kPoseTolerance = 1e-12;  // poses are copied, not computed
 
-io::Intrinsics smallCamera() { return test::camera80x60(); }
+core::Intrinsics smallCamera() { return test::camera80x60(); }
 
-io::Frame makeFrame(int64_t index) {
-  io::Frame f;
+core::Frame makeFrame(int64_t index) {
+  core::Frame f;
   f.index = index;
   f.timestamp = 5.0 + 0.5 * static_cast<double>(index);
   f.timestamp_text = std::to_string(f.timestamp);
@@ -70,10 +70,10 @@ class Gate {
 
 // Reports one detection whose score is the depth it saw minus 1 (= 0.01 * frame index).
 DetectorScheduler::DetectFunction gated(Gate* gate) {
-  return [gate](const io::Frame& f, const cv::Mat*, const cv::Mat* residual) {
+  return [gate](const core::Frame& f, const cv::Mat*, const cv::Mat* residual) {
     gate->pass();
     DetectorOutput out;
-    io::Detection d;
+    core::Detection d;
     d.id = 1;
     d.class_name = "toy_car";
     d.score = f.depth.at<float>(3, 3) - 1.0f;
@@ -87,7 +87,7 @@ DetectorScheduler::DetectFunction gated(Gate* gate) {
 
 DetectorOptions async(int every_n) {
   DetectorOptions o;
-  o.mode = "async";
+  o.mode = DetectorMode::kAsync;
   o.every_n_frames = every_n;
   return o;
 }
@@ -96,7 +96,7 @@ TEST(DetectorSchedulerAsync, BusyDetectorDropsFramesAndLateResultCarriesItsFrame
   Gate gate;
   DetectorScheduler s(async(1), "gated", gated(&gate), smallCamera());
   ASSERT_TRUE(s.async());
-  io::Frame f0 = makeFrame(0);
+  core::Frame f0 = makeFrame(0);
   const cv::Mat residual0(60, 80, CV_32F, cv::Scalar(0.75f));
   const std::vector<ObjectPose> objects0 = {{2, poseOf(20)}};
   EXPECT_FALSE(s.submit(f0, poseOf(0), nullptr, &residual0, &objects0).has_value());

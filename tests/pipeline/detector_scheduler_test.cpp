@@ -10,10 +10,10 @@ namespace {
 
 constexpr double kPoseTolerance = 1e-12;  // poses are copied, not computed
 
-io::Intrinsics smallCamera() { return test::camera80x60(); }
+core::Intrinsics smallCamera() { return test::camera80x60(); }
 
-io::Frame makeFrame(int64_t index) {
-  io::Frame f;
+core::Frame makeFrame(int64_t index) {
+  core::Frame f;
   f.index = index;
   f.timestamp = 100.0 + 0.1 * static_cast<double>(index);
   f.timestamp_text = std::to_string(f.timestamp);
@@ -31,8 +31,8 @@ Eigen::Isometry3d poseOf(int64_t index) {
 }
 
 // A detection covering the whole 80x60 image, as a source's stored detections.
-io::Detection wholeImageCar() {
-  io::Detection d;
+core::Detection wholeImageCar() {
+  core::Detection d;
   d.class_name = "car";
   d.score = 1.f;
   d.box = cv::Rect(0, 0, 4, 4);
@@ -42,17 +42,17 @@ io::Detection wholeImageCar() {
 
 DetectorOptions sequential(int every_n) {
   DetectorOptions o;
-  o.mode = "sequential";
+  o.mode = DetectorMode::kSequential;
   o.every_n_frames = every_n;
   return o;
 }
 
 // A detector that reports one box whose score encodes the depth it saw (1 + 0.01 index).
 DetectorScheduler::DetectFunction depthEcho(std::vector<int64_t>* calls) {
-  return [calls](const io::Frame& f, const cv::Mat* q0, const cv::Mat* residual) {
+  return [calls](const core::Frame& f, const cv::Mat* q0, const cv::Mat* residual) {
     calls->push_back(f.index);
     DetectorOutput out;
-    io::Detection d;
+    core::Detection d;
     d.id = 1;
     d.class_name = q0 ? "with_q0" : "car";
     d.score = f.depth.at<float>(0, 0) - 1.0f;
@@ -103,7 +103,7 @@ TEST(DetectorScheduler, SequentialRunsOnEveryNthFrameWithThatFramesPoses) {
 TEST(DetectorScheduler, BatchCarriesTheNewObjectsOnlyFlag) {
   DetectorScheduler s(
       sequential(1), "motion-like",
-      [](const io::Frame&, const cv::Mat*, const cv::Mat*) {
+      [](const core::Frame&, const cv::Mat*, const cv::Mat*) {
         DetectorOutput out;
         out.new_objects_only = true;
         return out;
@@ -127,7 +127,7 @@ TEST(DetectorScheduler, FeedbackImagesReachTheDetector) {
 TEST(DetectorScheduler, ThrowingDetectorIsAFailureNotACrash) {
   DetectorScheduler s(
       sequential(1), "thrower",
-      [](const io::Frame&, const cv::Mat*, const cv::Mat*) -> DetectorOutput {
+      [](const core::Frame&, const cv::Mat*, const cv::Mat*) -> DetectorOutput {
         throw std::runtime_error("out of memory in layer 3");
       },
       smallCamera());
@@ -155,9 +155,9 @@ TEST(DetectorScheduler, ProblemKindReplacesNumbers) {
 TEST(DetectorScheduler, NoPluginIsDisabledAndIgnoresSourceDetections) {
   DetectorScheduler s(sequential(1), "", smallCamera());
   EXPECT_FALSE(s.enabled());
-  io::Frame f = makeFrame(0);
-  const io::Detection d = wholeImageCar();
-  f.detections = std::vector<io::Detection>{d};
+  core::Frame f = makeFrame(0);
+  const core::Detection d = wholeImageCar();
+  f.detections = std::vector<core::Detection>{d};
   EXPECT_FALSE(s.submit(f, poseOf(0)).has_value());
   EXPECT_EQ(s.stats().runs, 0);
   EXPECT_EQ(s.stats().plugin, "");
@@ -169,14 +169,14 @@ TEST(DetectorScheduler, LabelledFramesOffTheScheduleAreCountedAndWarnedOnce) {
   // list) are not counted.
   std::vector<int64_t> calls;
   DetectorScheduler s(sequential(3), "echo", depthEcho(&calls), smallCamera());
-  const io::Detection d = wholeImageCar();
+  const core::Detection d = wholeImageCar();
   testing::internal::CaptureStderr();
   for (int64_t i = 0; i < 10; ++i) {
-    io::Frame f = makeFrame(i);
+    core::Frame f = makeFrame(i);
     if (i == 9) {
-      f.detections = std::vector<io::Detection>{};
+      f.detections = std::vector<core::Detection>{};
     } else if (i != 6) {
-      f.detections = std::vector<io::Detection>{d};
+      f.detections = std::vector<core::Detection>{d};
     }
     s.submit(f, poseOf(i));
   }
@@ -194,11 +194,11 @@ TEST(DetectorScheduler, LabelledFramesOffTheScheduleAreCountedAndWarnedOnce) {
 TEST(DetectorScheduler, LabelledFramesOnTheScheduleAreNotCounted) {
   std::vector<int64_t> calls;
   DetectorScheduler s(sequential(1), "echo", depthEcho(&calls), smallCamera());
-  const io::Detection d = wholeImageCar();
+  const core::Detection d = wholeImageCar();
   testing::internal::CaptureStderr();
   for (int64_t i = 0; i < 5; ++i) {
-    io::Frame f = makeFrame(i);
-    f.detections = std::vector<io::Detection>{d};
+    core::Frame f = makeFrame(i);
+    f.detections = std::vector<core::Detection>{d};
     s.submit(f, poseOf(i));
   }
   const std::string err = testing::internal::GetCapturedStderr();
@@ -209,7 +209,7 @@ TEST(DetectorScheduler, LabelledFramesOnTheScheduleAreNotCounted) {
 
 // ---- through the plugin host ---------------------------------------------------------------
 
-DetectorOptions withPlugin(const std::string& name, const std::string& mode = "sequential") {
+DetectorOptions withPlugin(const std::string& name, DetectorMode mode = DetectorMode::kSequential) {
   DetectorOptions o;
   o.plugin = name;
   o.search_path = {EMF_TEST_PLUGIN_DIR};
@@ -270,13 +270,6 @@ TEST(DetectorScheduler, UnknownPluginListsTheFoldersSearched) {
     EXPECT_NE(m.find("/tmp/emf-folder-a"), std::string::npos) << m;
     EXPECT_NE(m.find("/tmp/emf-folder-b"), std::string::npos) << m;
   }
-}
-
-TEST(DetectorScheduler, BadModeIsAConfigError) {
-  DetectorOptions o = sequential(1);
-  o.mode = "sometimes";
-  std::vector<int64_t> calls;
-  EXPECT_THROW(DetectorScheduler(o, "echo", depthEcho(&calls), smallCamera()), ConfigError);
 }
 
 }  // namespace

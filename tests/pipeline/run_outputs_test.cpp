@@ -19,8 +19,8 @@ Config tinyConfig() {
   return c;
 }
 
-io::Intrinsics tinyCamera() {
-  io::Intrinsics k;
+core::Intrinsics tinyCamera() {
+  core::Intrinsics k;
   k.fx = k.fy = 65.625;
   k.cx = 39.5;
   k.cy = 29.5;

@@ -3,9 +3,10 @@
 // and why; it never integrates a frame at a wrong pose (ISSUE 5: no silently wrong trajectory).
 #include <cmath>
 
-#include "io/eval.h"
-#include "io/frame_source.h"
+#include "core/frame_source.h"
+#include "eval/eval.h"
 #include "pipeline/slam_system.h"
+#include "sources/open_source.h"
 #include "test_support.h"
 
 namespace emf::pipeline {
@@ -22,11 +23,12 @@ TEST(SlamSystem, CabinetKeyframesTrackOrReportLostFrames) {
   Config config;  // defaults: 640x480, 1 cm voxels
   config.source.depth_scale = 5000;
   cl::Context ctx(config.cl);
-  auto src = io::openSource("tum:" + test::dataPath("tum-fr3-cabinet-keyframes"), config.source);
+  auto src =
+      sources::openSource("tum:" + test::dataPath("tum-fr3-cabinet-keyframes"), config.source);
   SlamSystem slam(ctx, config, src->intrinsics());
   io::Trajectory gt_tracked, est_tracked;
   std::optional<Eigen::Isometry3d> T_gt0;
-  io::Frame f;
+  core::Frame f;
   int frames = 0, lost = 0;
   double worst_integrated_m = 0, worst_integrated_deg = 0;
   while (src->next(f)) {
@@ -66,8 +68,8 @@ TEST(SlamSystem, CabinetKeyframesTrackOrReportLostFrames) {
   EXPECT_EQ(frames, 58);
   EXPECT_EQ(slam.framesLost(), lost);
   // Tracked frames (all of them, or the ones not reported lost) are within the ATE target.
-  ASSERT_GE(est_tracked.size(), io::kMinAtePairs) << lost << " of " << frames << " frames lost";
-  const io::AteResult ate = io::computeAte(gt_tracked, est_tracked);
+  ASSERT_GE(est_tracked.size(), eval::kMinAtePairs) << lost << " of " << frames << " frames lost";
+  const eval::AteResult ate = eval::computeAte(gt_tracked, est_tracked);
   EXPECT_LT(ate.trans_m.rmse, kTrackedAteToleranceM);
   std::printf(
       "cabinet: %d frames, %d lost, ATE of tracked %.4f m, worst integrated %.4f m / "

@@ -13,8 +13,9 @@
 #include <cstdio>
 #include <string>
 
-#include "io/frame_source.h"
+#include "core/frame_source.h"
 #include "pipeline/slam_system.h"
+#include "sources/open_source.h"
 #include "test_support.h"
 
 namespace emf::pipeline {
@@ -37,10 +38,10 @@ ChairRun runChair(bool claim_region) {
   config.objects.claim_region = claim_region;
   cl::Context ctx(config.cl);
   const std::string uri = "synth:occlusion?frames=" + std::to_string(kFrames) + "&seed=1";
-  auto src = io::openSource(uri, config.source);
+  auto src = sources::openSource(uri, config.source);
   EXPECT_EQ(src->intrinsics().width, 640);
   SlamSystem slam(ctx, config, src->intrinsics(), uri);
-  io::Frame f;
+  core::Frame f;
   int chair = 0, frames = 0;
   Eigen::Vector3d centre_in_object = Eigen::Vector3d::Zero(), first = Eigen::Vector3d::Zero();
   ChairRun run;

@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "box_room_scene.h"
-#include "io/synth/synth_source.h"
 #include "pipeline/slam_system.h"
+#include "synth/synth_source.h"
 #include "test_support.h"
 
 namespace emf::pipeline {
@@ -21,8 +21,8 @@ constexpr int kWidth = 320, kHeight = 240;
 constexpr int kFrames = 120;
 constexpr int kBoxId = 1;
 
-io::synth::Scene stillBoxScene() {
-  io::synth::Scene s = test_scene::boxRoomScene("still-box", kBoxId, -0.2, 0.6);
+synth::Scene stillBoxScene() {
+  synth::Scene s = test_scene::boxRoomScene("still-box", kBoxId, -0.2, 0.6);
   s.camera.path.origin_m = Eigen::Vector3d(0, -1.6, 1.2);
   s.camera.path.position_terms = {{Eigen::Vector3d(0.15, 0, 0), 0.2, 0.0}};
   s.camera.target.origin_m = Eigen::Vector3d(0, 0.6, 0.3);
@@ -31,8 +31,8 @@ io::synth::Scene stillBoxScene() {
 }
 
 /// A false detection: an ellipse on the wall above the box.
-io::Detection blob() {
-  io::Detection d;
+core::Detection blob() {
+  core::Detection d;
   d.id = 2;
   d.class_name = "cup";
   d.score = 0.6f;
@@ -53,15 +53,15 @@ Reported run(int confirm_detections) {
   Config config = test_scene::smallSceneConfig();
   config.objects.confirm_detections = confirm_detections;
   cl::Context ctx(config.cl);
-  io::synth::SynthOptions so;
+  synth::SynthOptions so;
   so.width = kWidth;
   so.height = kHeight;
-  io::synth::SynthSource src(so, stillBoxScene());
+  synth::SynthSource src(so, stillBoxScene());
   SlamSystem slam(ctx, config, src.intrinsics());
   Reported r;
-  io::Frame f;
+  core::Frame f;
   while (src.next(f)) {
-    std::vector<io::Detection> dets;
+    std::vector<core::Detection> dets;
     const bool detect = f.index % 30 == 0;
     if (detect) dets.push_back(test_scene::exactDetection(f, kBoxId));
     if (f.index == 30) dets.push_back(blob());

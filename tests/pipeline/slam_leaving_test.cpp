@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "box_room_scene.h"
-#include "io/synth/synth_source.h"
 #include "pipeline/slam_system.h"
+#include "synth/synth_source.h"
 #include "test_support.h"
 
 namespace emf::pipeline {
@@ -31,11 +31,11 @@ constexpr int kMinHeldFrames = 8, kMaxHeldFrames = 25;
 // The rule costs the frames of the last sliver: 55 tracked with it, 61-70 without.
 constexpr int kMinTrackedFrames = 50;
 
-io::synth::Scene slidingBoxScene() {
+synth::Scene slidingBoxScene() {
   // The camera stands still 2.3 m from the box; between 0.3 s and 3.0 s the box slides 1 m to
   // the left (up to ~2.5 cm per frame) and turns by 0.5 rad, leaving through the left image
   // border on frames ~50-62.
-  io::synth::Scene s = test_scene::boxRoomScene("sliding-box", kBoxId, -0.8, 0.6);
+  synth::Scene s = test_scene::boxRoomScene("sliding-box", kBoxId, -0.8, 0.6);
   s.objects.back().trajectory.moves.push_back(
       {0.3, 3.0, Eigen::Vector3d(-1.0, 0, 0), Eigen::Vector3d(0, 0, -0.5)});
   s.camera.path.origin_m = Eigen::Vector3d(0, -1.5, 1.2);
@@ -58,18 +58,18 @@ BoxRun runScene(double leaving_fraction) {
   Config config = test_scene::smallSceneConfig();
   config.objects.leaving_fraction = leaving_fraction;
   cl::Context ctx(config.cl);
-  io::synth::SynthOptions so;
+  synth::SynthOptions so;
   so.width = kWidth;
   so.height = kHeight;
-  io::synth::SynthSource src(so, slidingBoxScene());
+  synth::SynthSource src(so, slidingBoxScene());
   SlamSystem slam(ctx, config, src.intrinsics());
   BoxRun run;
-  io::Frame f;
+  core::Frame f;
   Eigen::Isometry3d T_gt_est = Eigen::Isometry3d::Identity();  // estimated object frame -> true
   Eigen::Isometry3d T_world_held = Eigen::Isometry3d::Identity();
   double error_sum = 0;
   while (src.next(f) && run.deleted_frame < 0) {
-    std::vector<io::Detection> dets;
+    std::vector<core::Detection> dets;
     if (f.index == 0) dets.push_back(test_scene::exactDetection(f, kBoxId));
     const FrameOutcome out = slam.process(f, f.index == 0 ? &dets : nullptr);
     if (out.lost) ++run.lost_frames;

@@ -13,8 +13,8 @@
 #include <vector>
 
 #include "box_room_scene.h"
-#include "io/synth/synth_source.h"
 #include "pipeline/slam_system.h"
+#include "synth/synth_source.h"
 #include "test_support.h"
 
 namespace emf::pipeline {
@@ -37,8 +37,8 @@ constexpr int kMovedAwayFrames = 91;  // detections on frames 0, 30, 60 and 90 (
 constexpr double kMovedMinIoU = 0.85;
 constexpr double kMovedMapAloneMaxIoU = 0.5;
 
-io::synth::Scene stillBoxScene() {
-  io::synth::Scene s = test_scene::boxRoomScene("still-box", kBoxId, 0.0, 0.6);
+synth::Scene stillBoxScene() {
+  synth::Scene s = test_scene::boxRoomScene("still-box", kBoxId, 0.0, 0.6);
   // The camera 2.3 m in front of the box, swaying sideways and up and down.
   s.camera.path.origin_m = Eigen::Vector3d(0, -1.7, 1.2);
   s.camera.path.position_terms.push_back({Eigen::Vector3d(0.15, 0, 0.05), 0.3, 0.0});
@@ -49,8 +49,8 @@ io::synth::Scene stillBoxScene() {
 
 // The same box, still for 2 s, then pushed 0.3 m away from the camera within 0.5 s (frames
 // 60-75), and still again: the background's copy of its old surface now stands in front of it.
-io::synth::Scene movedAwayBoxScene() {
-  io::synth::Scene s = stillBoxScene();
+synth::Scene movedAwayBoxScene() {
+  synth::Scene s = stillBoxScene();
   s.name = "moved-away-box";
   s.objects.front().trajectory.moves.push_back(
       {2.0, 2.5, Eigen::Vector3d(0, kMovedAwayM, 0), Eigen::Vector3d::Zero()});
@@ -65,23 +65,23 @@ struct MatchRun {
 };
 
 MatchRun runScene(double render_margin_m, bool measured_depth = true,
-                  const io::synth::Scene& scene = stillBoxScene()) {
+                  const synth::Scene& scene = stillBoxScene()) {
   Config config = test_scene::smallSceneConfig();
   config.map.background_voxel_m = kBackgroundVoxelM;
   config.map.background_resolution = 512;
   config.objects.render_margin_m = render_margin_m;
   config.objects.mask_measured_depth = measured_depth;
   cl::Context ctx(config.cl);
-  io::synth::SynthOptions so;
+  synth::SynthOptions so;
   so.width = kWidth;
   so.height = kHeight;
-  io::synth::SynthSource src(so, scene);
+  synth::SynthSource src(so, scene);
   SlamSystem slam(ctx, config, src.intrinsics());
   MatchRun run;
   std::vector<int> seen;
-  io::Frame f;
+  core::Frame f;
   while (src.next(f)) {
-    std::vector<io::Detection> dets;
+    std::vector<core::Detection> dets;
     const bool detect = f.index % kDetectEvery == 0;
     if (detect) dets.push_back(test_scene::exactDetection(f, kBoxId));
     const FrameOutcome out = slam.process(f, detect ? &dets : nullptr);
@@ -119,7 +119,7 @@ TEST(SlamMatch, AStillObjectsMaskWinsAgainstTheBackgroundsCopyOfIt) {
 }
 
 TEST(SlamMatch, AnObjectThatMovedBehindTheBackgroundsCopyOfItIsStillMatched) {
-  const io::synth::Scene scene = movedAwayBoxScene();
+  const synth::Scene scene = movedAwayBoxScene();
   const MatchRun with = runScene(Config{}.objects.render_margin_m, true, scene);
   const MatchRun without = runScene(Config{}.objects.render_margin_m, false, scene);
   printRun("with the frame's depth", with);

@@ -7,9 +7,10 @@
 #include <map>
 #include <set>
 
-#include "io/eval.h"
-#include "io/frame_source.h"
+#include "core/frame_source.h"
+#include "eval/eval.h"
 #include "pipeline/slam_system.h"
+#include "sources/open_source.h"
 #include "test_support.h"
 #include "track/preprocess.h"
 #include "track/tracker.h"
@@ -57,9 +58,9 @@ struct RelativeError {
 RelativeError perfectAssociationError(double truncation_voxels) {
   const Config config = smallConfig();
   cl::Context ctx(config.cl);
-  auto src =
-      io::openSource("synth:cars?frames=12&width=320&height=240&seed=1&noise=0", config.source);
-  const io::Intrinsics k = src->intrinsics();
+  auto src = sources::openSource("synth:cars?frames=12&width=320&height=240&seed=1&noise=0",
+                                 config.source);
+  const core::Intrinsics k = src->intrinsics();
   map::VoxelPool pool(ctx, config.map);
   track::Preprocessor pre(ctx, objectPreprocessOptions(config), k);
   track::Tracker tracker(ctx, objectTrackOptions(config, k.width), k.width, k.height);
@@ -70,7 +71,7 @@ RelativeError perfectAssociationError(double truncation_voxels) {
   Eigen::Isometry3d T_vc_prev, motion = Eigen::Isometry3d::Identity(), T_oc_gt_prev;
   double sum_m = 0, sum_deg = 0;
   int n = 0;
-  io::Frame f;
+  core::Frame f;
   while (src->next(f)) {
     cv::Mat mask;
     cv::Mat(f.instance_ids == gid).convertTo(mask, CV_32F, 1.0 / 255);
@@ -143,11 +144,11 @@ CarsRun runCars(const Config& config, int frames, bool source_detections) {
   cl::Context ctx(config.cl);
   const std::string uri =
       "synth:cars?frames=" + std::to_string(frames) + "&width=320&height=240&seed=1";
-  auto src = io::openSource(uri, config.source);
+  auto src = sources::openSource(uri, config.source);
   SlamSystem slam(ctx, config, src->intrinsics(), uri);
   io::Trajectory camera_gt, camera_est;
   std::map<int, io::Trajectory> object_gt, object_est;  // T_object_camera per frame
-  io::Frame f;
+  core::Frame f;
   CarsRun run;
   std::set<int> seen;  // objects reported so far
   while (src->next(f)) {
@@ -182,7 +183,7 @@ CarsRun runCars(const Config& config, int frames, bool source_detections) {
       }
     }
   }
-  run.camera_ate_m = io::computeAte(camera_gt, camera_est).trans_m.rmse;
+  run.camera_ate_m = eval::computeAte(camera_gt, camera_est).trans_m.rmse;
   run.lost = slam.framesLost();
   run.refused = slam.poolRefusedObjects();
   run.pool_full_frames = slam.backgroundPoolFullFrames();
@@ -196,7 +197,7 @@ CarsRun runCars(const Config& config, int frames, bool source_detections) {
     for (const auto& [id, est] : object_est) {
       const double c = static_cast<double>(est.size()) / static_cast<double>(gt.size());
       if (c < 0.3) continue;
-      const double ate = io::computeAte(gt, est).trans_m.rmse;
+      const double ate = eval::computeAte(gt, est).trans_m.rmse;
       if (ate < best) {
         best = ate;
         best_id = id;

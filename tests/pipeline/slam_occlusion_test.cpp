@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "box_room_scene.h"
-#include "io/synth/synth_source.h"
 #include "pipeline/slam_system.h"
+#include "synth/synth_source.h"
 #include "test_support.h"
 
 namespace emf::pipeline {
@@ -33,16 +33,16 @@ constexpr double kMinHeldFraction = 0.9;
 // once uncovered.
 constexpr double kPoseDriftToleranceM = 0.025;
 
-io::synth::Scene coveredBoxScene() {
-  using io::synth::at;
-  io::synth::Scene s = test_scene::boxRoomScene("covered-box", kBoxId, 0, 0.6);
+synth::Scene coveredBoxScene() {
+  using synth::at;
+  synth::Scene s = test_scene::boxRoomScene("covered-box", kBoxId, 0, 0.6);
   // A panel 0.6 m wide and 1 m tall, 1.1 m from the camera and 1 m in front of the box: it
   // slides in from the left, stays in front of the box and slides out to the right.
-  io::synth::SceneObject panel;
+  synth::SceneObject panel;
   panel.id = kPanelId;
   panel.class_name = "panel";
-  panel.parts.push_back(io::synth::makeBox({0.3, 0.025, 0.5}, at(0, 0, 0.5),
-                                           test_scene::solidMaterial(0.7f, 0.2f, 0.2f)));
+  panel.parts.push_back(synth::makeBox({0.3, 0.025, 0.5}, at(0, 0, 0.5),
+                                       test_scene::solidMaterial(0.7f, 0.2f, 0.2f)));
   panel.trajectory.origin_m = Eigen::Vector3d(-1.3, -0.4, 0);
   panel.trajectory.moves.push_back({0.3, 0.8, Eigen::Vector3d(1.3, 0, 0), Eigen::Vector3d::Zero()});
   panel.trajectory.moves.push_back({1.8, 2.3, Eigen::Vector3d(1.3, 0, 0), Eigen::Vector3d::Zero()});
@@ -68,22 +68,22 @@ BoxRun runScene(double hidden_fraction, uint64_t seed = 1) {
   Config config = test_scene::smallSceneConfig();
   config.objects.hidden_fraction = hidden_fraction;
   cl::Context ctx(config.cl);
-  io::synth::SynthOptions so;
+  synth::SynthOptions so;
   so.width = kWidth;
   so.height = kHeight;
   so.seed = seed;
-  io::synth::SynthSource src(so, coveredBoxScene());
+  synth::SynthSource src(so, coveredBoxScene());
   SlamSystem slam(ctx, config, src.intrinsics());
   BoxRun run;
-  io::Frame f;
+  core::Frame f;
   const int box_px0 = [&] {
-    io::synth::SynthSource first(so, coveredBoxScene());
-    io::Frame f0;
+    synth::SynthSource first(so, coveredBoxScene());
+    core::Frame f0;
     EXPECT_TRUE(first.next(f0));
     return cv::countNonZero(f0.instance_ids == kBoxId);
   }();
   while (src.next(f)) {
-    std::vector<io::Detection> dets;
+    std::vector<core::Detection> dets;
     if (f.index == 0) dets.push_back(test_scene::exactDetection(f, kBoxId));
     if (f.index >= kCoveredFirst && f.index <= kCoveredLast &&
         cv::countNonZero(f.instance_ids == kBoxId) < 0.05 * box_px0) {

@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "box_room_scene.h"
-#include "io/synth/synth_source.h"
 #include "pipeline/slam_system.h"
+#include "synth/synth_source.h"
 #include "test_support.h"
 
 namespace emf::pipeline {
@@ -27,13 +27,13 @@ constexpr double kReattachedMaxErrorM = 0.015;
 // Frames the box is tracked again after it came back (frames 185-239 are in view and still).
 constexpr int kMinTrackedAfterReturn = 25;
 
-io::synth::Scene returningBoxScene() {
-  using io::synth::at;
-  io::synth::Scene s = test_scene::boxRoomScene("returning-box", kBoxId, -0.2, 0.6);
+synth::Scene returningBoxScene() {
+  using synth::at;
+  synth::Scene s = test_scene::boxRoomScene("returning-box", kBoxId, -0.2, 0.6);
   // An L: a 40 x 30 x 20 cm block with a 20 cm cube on one end (no symmetry about z).
-  const io::synth::Material m = test_scene::solidMaterial(0.7f, 0.4f, 0.2f);
-  s.objects.back().parts = {io::synth::makeBox({0.2, 0.15, 0.1}, at(0, 0, 0.1), m),
-                            io::synth::makeBox({0.1, 0.1, 0.1}, at(0.1, 0.05, 0.3), m)};
+  const synth::Material m = test_scene::solidMaterial(0.7f, 0.4f, 0.2f);
+  s.objects.back().parts = {synth::makeBox({0.2, 0.15, 0.1}, at(0, 0, 0.1), m),
+                            synth::makeBox({0.1, 0.1, 0.1}, at(0.1, 0.05, 0.3), m)};
   // Out through the left border (0.3-2.5 s), moved 0.35 m and turned 60 deg out of sight, back
   // in (4.0-6.2 s).
   s.objects.back().trajectory.moves = {
@@ -58,19 +58,19 @@ BoxRun runScene(int reidentify_frames) {
   Config config = test_scene::smallSceneConfig();
   config.objects.reidentify_frames = reidentify_frames;
   cl::Context ctx(config.cl);
-  io::synth::SynthOptions so;
+  synth::SynthOptions so;
   so.width = kWidth;
   so.height = kHeight;
-  io::synth::SynthSource src(so, returningBoxScene());
+  synth::SynthSource src(so, returningBoxScene());
   SlamSystem slam(ctx, config, src.intrinsics());
   BoxRun run;
-  io::Frame f;
+  core::Frame f;
   // Where the first estimate's object frame lies in the true one: fixed at its first tracked
   // frame, so a re-attached pose that turned the model wrongly shows as an error.
   std::optional<Eigen::Isometry3d> T_gt_est;
   bool dormant_seen = false;
   while (src.next(f)) {
-    std::vector<io::Detection> dets;
+    std::vector<core::Detection> dets;
     const bool detect = f.index % 30 == 0;
     if (detect && cv::countNonZero(f.instance_ids == kBoxId) > 200) {
       dets.push_back(test_scene::exactDetection(f, kBoxId));

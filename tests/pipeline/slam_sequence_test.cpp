@@ -1,7 +1,8 @@
 // The static SLAM loop on a 40-frame synthetic room: camera ATE against the exact ground truth.
-#include "io/eval.h"
-#include "io/frame_source.h"
+#include "core/frame_source.h"
+#include "eval/eval.h"
 #include "pipeline/slam_system.h"
+#include "sources/open_source.h"
 #include "test_support.h"
 
 namespace emf::pipeline {
@@ -20,10 +21,10 @@ Config smallConfig() {
 TEST(SlamSystem, TracksTheSyntheticRoom) {
   const Config config = smallConfig();
   cl::Context ctx(config.cl);
-  auto src = io::openSource("synth:room?frames=40&width=320&height=240&seed=3", config.source);
+  auto src = sources::openSource("synth:room?frames=40&width=320&height=240&seed=3", config.source);
   SlamSystem slam(ctx, config, src->intrinsics());
   io::Trajectory gt, est;
-  io::Frame f;
+  core::Frame f;
   while (src->next(f)) {
     const FrameOutcome o = slam.process(f);
     ASSERT_FALSE(o.lost) << "frame " << o.index << ": " << o.loss_reason;
@@ -33,7 +34,7 @@ TEST(SlamSystem, TracksTheSyntheticRoom) {
   }
   EXPECT_EQ(slam.framesProcessed(), 40);
   EXPECT_EQ(slam.framesLost(), 0);
-  const io::AteResult ate = io::computeAte(gt, est);
+  const eval::AteResult ate = eval::computeAte(gt, est);
   EXPECT_LT(ate.trans_m.rmse, kSynthRoomAteToleranceM);
   EXPECT_GT(slam.pool().stats().used_slots, 0);
   EXPECT_EQ(slam.pool().stats().dropped_blocks, 0);

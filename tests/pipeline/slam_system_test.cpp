@@ -5,7 +5,8 @@
 #include <cmath>
 #include <vector>
 
-#include "io/frame_source.h"
+#include "core/frame_source.h"
+#include "sources/open_source.h"
 #include "test_support.h"
 
 namespace emf::pipeline {
@@ -24,9 +25,9 @@ Config smallConfig() {
 TEST(SlamSystem, LostFrameIsNotIntegratedAndPoseIsKept) {
   const Config config = smallConfig();
   cl::Context ctx(config.cl);
-  auto src = io::openSource("synth:room?frames=12&width=320&height=240&seed=5", config.source);
+  auto src = sources::openSource("synth:room?frames=12&width=320&height=240&seed=5", config.source);
   SlamSystem slam(ctx, config, src->intrinsics());
-  io::Frame f;
+  core::Frame f;
   Eigen::Isometry3d T_gtworld_first = Eigen::Isometry3d::Identity();
   std::vector<FrameOutcome> tracked;
   for (int i = 0; i < 10; ++i) {
@@ -53,7 +54,7 @@ TEST(SlamSystem, LostFrameIsNotIntegratedAndPoseIsKept) {
   const Eigen::Isometry3d before = slam.T_world_camera();
   const int used_before = slam.pool().stats().used_slots;
   // A frame of nothing but invalid depth: no evidence at all.
-  io::Frame blank = f;
+  core::Frame blank = f;
   blank.depth.setTo(std::nanf(""));
   const FrameOutcome lost = slam.process(blank);
   EXPECT_TRUE(lost.lost);
@@ -77,14 +78,14 @@ TEST(SlamSystem, LostFrameIsNotIntegratedAndPoseIsKept) {
 TEST(SlamSystem, WrongFrameSizeNamesTheFrame) {
   const Config config = smallConfig();
   cl::Context ctx(config.cl);
-  io::Intrinsics k;
+  core::Intrinsics k;
   k.fx = k.fy = 262.5;
   k.cx = 159.5;
   k.cy = 119.5;
   k.width = 320;
   k.height = 240;
   SlamSystem slam(ctx, config, k);
-  io::Frame f;
+  core::Frame f;
   f.index = 7;
   f.depth = cv::Mat(480, 640, CV_32F, cv::Scalar(1.0f));
   try {

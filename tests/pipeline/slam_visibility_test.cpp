@@ -14,8 +14,8 @@
 
 #include "box_room_scene.h"
 #include "em/object_rules.h"
-#include "io/synth/synth_source.h"
 #include "pipeline/slam_system.h"
+#include "synth/synth_source.h"
 #include "test_support.h"
 
 namespace emf::pipeline {
@@ -32,8 +32,8 @@ constexpr int kGroundTruthFrameTolerance = 3;
 // same frame on seeds 1-6).
 constexpr int kReducedFrameTolerance = 1;
 
-io::synth::Scene leavingBoxScene() {
-  io::synth::Scene s = test_scene::boxRoomScene("leaving-box", kObjectId, -0.3, 0.6);
+synth::Scene leavingBoxScene() {
+  synth::Scene s = test_scene::boxRoomScene("leaving-box", kObjectId, -0.3, 0.6);
   // The camera stands 2 m in front of the box and turns right by about 45 deg between 0.2 s
   // and 1.6 s: the box leaves through the left image border.
   s.camera.path.origin_m = Eigen::Vector3d(0, -1.5, 1.2);
@@ -54,16 +54,16 @@ Deletion runScene(int visibility_width, int* lost_frames) {
   Config config = test_scene::smallSceneConfig();
   config.objects.visibility_width = visibility_width;
   cl::Context ctx(config.cl);
-  io::synth::SynthOptions so;
+  synth::SynthOptions so;
   so.width = kWidth;
   so.height = kHeight;
-  io::synth::SynthSource src(so, leavingBoxScene());
+  synth::SynthSource src(so, leavingBoxScene());
   SlamSystem slam(ctx, config, src.intrinsics());
   Deletion d;
   *lost_frames = 0;
-  io::Frame f;
+  core::Frame f;
   while (src.next(f)) {
-    std::vector<io::Detection> dets;
+    std::vector<core::Detection> dets;
     if (f.index == 0) dets.push_back(test_scene::exactDetection(f, kObjectId));
     const FrameOutcome out = slam.process(f, f.index == 0 ? &dets : nullptr);
     if (out.lost) ++*lost_frames;
@@ -87,14 +87,14 @@ TEST(SlamVisibility, ALeavingObjectIsDeletedWhenItsSilhouetteIsTooSmall) {
   const double scale = kWidth / 640.0;
   opt.visibility_border_px = static_cast<int>(std::lround(opt.visibility_border_px * scale));
   opt.invisible_min_px = static_cast<int>(std::lround(opt.invisible_min_px * scale * scale));
-  io::synth::SynthOptions so;
+  synth::SynthOptions so;
   so.width = kWidth;
   so.height = kHeight;
-  io::synth::SynthSource truth(so, leavingBoxScene());
+  synth::SynthSource truth(so, leavingBoxScene());
   int64_t gt_frame = -1;
   int first_px = 0;
   for (int64_t i = 0; i < kFrames && gt_frame < 0; ++i) {
-    io::Frame f;
+    core::Frame f;
     truth.renderFrame(i, &f);
     cv::Mat ids;
     f.instance_ids.convertTo(ids, CV_32S);

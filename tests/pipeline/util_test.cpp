@@ -1,4 +1,5 @@
 #include "pipeline/frame_counters.h"
+#include "pipeline/object_settings.h"
 #include "pipeline/progress.h"
 #include "pipeline/slam_system.h"
 #include "pipeline/stage_timer.h"
@@ -64,7 +65,7 @@ TEST(ObjectTrackOptions, ObjectsKeepTheirOwnHuberDeltaAndRules) {
   EXPECT_DOUBLE_EQ(o.huber_truncation_factor, 0.2);
   EXPECT_DOUBLE_EQ(o.inlier_truncation_factor, config.track.inlier_truncation_factor);
   EXPECT_EQ(o.pixel_stride, 1);
-  EXPECT_EQ(o.step_acceptance, "fixed_weights");
+  EXPECT_EQ(o.step_acceptance, track::StepAcceptance::kFixedWeights);
   EXPECT_DOUBLE_EQ(o.min_valid_fraction, 0.0);
   // The defaults: the camera's tight delta, the objects' the paper's.
   EXPECT_LT(Config{}.track.huber_truncation_factor,
@@ -82,6 +83,47 @@ TEST(ObjectTrackOptions, RotationPriorScalesWithTheImageArea) {
   EXPECT_DOUBLE_EQ(config.track.prior_rotation_weight, 0.0);
   config.objects.motion_prior_rotation = 0.0;
   EXPECT_DOUBLE_EQ(objectTrackOptions(config, 640).prior_rotation_weight, 0.0);
+}
+
+TEST(ObjectSettings, EverythingTheObjectsDeriveComesFromOnePlace) {
+  Config config;
+  config.objects.min_detection_px = 40;
+  config.objects.invisible_min_px = 1600;
+  config.objects.visibility_border_px = 20;
+  config.objects.visibility_width = 160;
+  config.track.rotation_centre = track::RotationCentre::kCamera;
+  core::Intrinsics k;
+  k.width = 320;
+  k.height = 240;
+  k.fx = k.fy = 262.5;
+  k.cx = 159.5;
+  k.cy = 119.5;
+  const ObjectSettings s = deriveObjectSettings(config, k);
+  // Pixel thresholds given for 640 px: lengths with the width, areas with its square.
+  EXPECT_EQ(s.rules.min_detection_px, 20);
+  EXPECT_EQ(s.rules.visibility_border_px, 10);
+  EXPECT_EQ(s.rules.invisible_min_px, 400);
+  EXPECT_EQ(s.visibility_rules.visibility_border_px, 5);
+  EXPECT_EQ(s.visibility_rules.invisible_min_px, 100);
+  // The visibility cast at objects.visibility_width, the frame's aspect kept.
+  EXPECT_EQ(s.visibility_k.width, 160);
+  EXPECT_EQ(s.visibility_k.height, 120);
+  EXPECT_DOUBLE_EQ(s.visibility_k.fx, k.fx / 2);
+  // The leaving test: the frame at half size in the middle of a frame-sized cast.
+  EXPECT_EQ(s.wide_frame, cv::Rect(80, 60, 160, 120));
+  EXPECT_EQ(s.wide_k.width, 320);
+  EXPECT_EQ(s.wide_k.height, 240);
+  EXPECT_DOUBLE_EQ(s.wide_k.fx, k.fx / 2);
+  // Tracking: the camera's keys with the objects' own, whatever track.* says.
+  EXPECT_EQ(s.track.rotation_centre, track::RotationCentre::kStiffness);
+  EXPECT_EQ(s.track.step_acceptance, track::StepAcceptance::kFixedWeights);
+  EXPECT_DOUBLE_EQ(s.track.max_motion_m, config.track.max_motion_m);
+  EXPECT_DOUBLE_EQ(s.reid_track.max_motion_m, 100.0);
+  EXPECT_DOUBLE_EQ(s.reid_track.prior_rotation_weight, 0.0);
+  EXPECT_EQ(s.reid_track.rotation_centre, track::RotationCentre::kStiffness);
+  // A visibility width above the frame's is the frame's.
+  config.objects.visibility_width = 1280;
+  EXPECT_EQ(deriveObjectSettings(config, k).visibility_k.width, 320);
 }
 
 }  // namespace

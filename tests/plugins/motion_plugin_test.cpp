@@ -144,7 +144,7 @@ TEST(MotionOptionsTest, ParsesAndRejects) {
 }
 
 TEST(MotionPlugin, ThroughTheHost) {
-  emf::io::Intrinsics k;
+  emf::core::Intrinsics k;
   k.fx = k.fy = 300;
   k.cx = kW / 2.0;
   k.cy = kH / 2.0;
@@ -152,7 +152,7 @@ TEST(MotionPlugin, ThroughTheHost) {
   k.height = kH;
   auto p = emf::pipeline::DetectorPlugin::load("motion", {EMF_PLUGIN_BUILD_DIR},
                                                "min_consecutive=1", "", k);
-  emf::io::Frame f;
+  emf::core::Frame f;
   f.depth = cv::Mat(kH, kW, CV_32F, cv::Scalar(2.0f));
   f.timestamp_text = "0.0";
   const auto no_feedback = p->detect(f);

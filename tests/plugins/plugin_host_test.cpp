@@ -12,10 +12,10 @@ namespace {
 const std::vector<std::string> kTestPath = {EMF_TEST_PLUGIN_DIR};
 const std::vector<std::string> kBuildPath = {EMF_PLUGIN_BUILD_DIR};
 
-io::Intrinsics smallCamera() { return test::camera80x60(); }
+core::Intrinsics smallCamera() { return test::camera80x60(); }
 
-io::Frame frame(int64_t index, const std::string& stamp) {
-  io::Frame f;
+core::Frame frame(int64_t index, const std::string& stamp) {
+  core::Frame f;
   f.index = index;
   f.timestamp_text = stamp;
   f.timestamp = std::stod(stamp);
@@ -81,7 +81,7 @@ TEST(PluginHost, MalformedDetectionsAreDroppedGoodOneKept) {
     const DetectorOutput out = p->detect(frame(round, "1.000000"));
     EXPECT_TRUE(out.error.empty()) << out.error;
     ASSERT_EQ(out.detections.size(), 1u);
-    const io::Detection& d = out.detections[0];
+    const core::Detection& d = out.detections[0];
     EXPECT_EQ(d.id, 1);
     EXPECT_EQ(d.class_name, "cup");
     EXPECT_FLOAT_EQ(d.score, 0.9f);

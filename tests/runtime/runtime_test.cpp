@@ -28,8 +28,8 @@ constexpr double kPatienceS = 60.0;
 /// Depth values encode the frame index exactly (small integers in float).
 constexpr double kDepthOffsetM = 1.0;
 
-io::Intrinsics intrinsics() {
-  io::Intrinsics k;
+core::Intrinsics intrinsics() {
+  core::Intrinsics k;
   k.fx = k.fy = 20;
   k.cx = 7.5;
   k.cy = 5.5;
@@ -40,7 +40,7 @@ io::Intrinsics intrinsics() {
 
 /// Frame i: depth = kDepthOffsetM + i everywhere but pixel (1, 0) = i * 0.5 + 2, colour (i % 256);
 /// detections (class "d<i>") on every `det_every`-th frame.
-void makeFrame(int64_t i, io::Frame* f, int det_every) {
+void makeFrame(int64_t i, core::Frame* f, int det_every) {
   f->index = i;
   f->timestamp = 100.0 + static_cast<double>(i) / 30.0;
   f->rgb_timestamp = f->timestamp;
@@ -50,22 +50,22 @@ void makeFrame(int64_t i, io::Frame* f, int det_every) {
   f->color = cv::Mat(kHeight, kWidth, CV_8UC3, cv::Scalar(static_cast<double>(i % 256), 1, 2));
   f->detections.reset();
   if (det_every > 0 && i % det_every == 0) {
-    io::Detection d;
+    core::Detection d;
     d.id = 1;
     d.class_name = "d" + std::to_string(i);
-    f->detections = std::vector<io::Detection>{d};
+    f->detections = std::vector<core::Detection>{d};
   }
 }
 
 /// A recorded (or, with `live`, endless paced) source of synthetic frames.
-class FakeSource : public io::FrameSource {
+class FakeSource : public core::FrameSource {
  public:
   FakeSource(int64_t frames, int det_every = 0, double period_s = 0.0, int64_t throw_at = -1)
       : frames_(frames), det_every_(det_every), period_s_(period_s), throw_at_(throw_at) {}
-  io::Intrinsics intrinsics() const override { return emf::runtime::intrinsics(); }
+  core::Intrinsics intrinsics() const override { return emf::runtime::intrinsics(); }
   /// Runs before frame i is produced (gates).
   std::function<void(int64_t)> before_next;
-  bool next(io::Frame& frame) override {
+  bool next(core::Frame& frame) override {
     if (frames_ >= 0 && next_ >= frames_) return false;
     if (before_next) before_next(next_);
     if (next_ == throw_at_)
@@ -90,9 +90,9 @@ class FakeSource : public io::FrameSource {
 /// detections become one object of that class.
 class FakeProcessor : public FrameProcessor {
  public:
-  std::function<void(const io::Frame&)> before;  // runs first (gates, sleeps, throws)
-  bool check_timestamp_text = false;             // frames must carry makeFrame's timestamp text
-  pipeline::FrameOutcome process(const io::Frame& frame) override {
+  std::function<void(const core::Frame&)> before;  // runs first (gates, sleeps, throws)
+  bool check_timestamp_text = false;               // frames must carry makeFrame's timestamp text
+  pipeline::FrameOutcome process(const core::Frame& frame) override {
     if (before) before(frame);
     if (check_timestamp_text) {
       // The source's timestamp text reaches the processor (detector plugins name files by it);
@@ -130,7 +130,7 @@ class FakeProcessor : public FrameProcessor {
 
 pipeline::RuntimeOptions options(const char* policy, int slots, int queue) {
   pipeline::RuntimeOptions o;
-  o.ring_policy = policy;
+  o.ring_policy = fw::parseRingPolicy(policy);
   o.ring_slots = slots;
   o.result_queue = queue;
   return o;
@@ -167,7 +167,7 @@ TEST(Runtime, BlockPolicyDeliversEveryFrameInOrderThenEndOfStream) {
   proc.check_timestamp_text = true;
   std::mutex m;
   std::vector<int64_t> callback_indices;
-  Runtime rt(std::unique_ptr<io::FrameSource>(src), proc, options("block", 3, kFrames),
+  Runtime rt(std::unique_ptr<core::FrameSource>(src), proc, options("block", 3, kFrames),
              [&](const RuntimeResult& r) {
                std::lock_guard<std::mutex> lock(m);
                callback_indices.push_back(r.source_index);
@@ -240,7 +240,7 @@ TEST(Runtime, DropOldestKeepsTheNewestFramesAndCountsTheRest) {
   source->before_next = [&](int64_t i) {
     if (i == 1 && !waitUntil([&] { return holding_first.load(); })) gate_ok = false;
   };
-  proc.before = [&](const io::Frame& f) {
+  proc.before = [&](const core::Frame& f) {
     if (f.index != 0) return;
     holding_first = true;
     const auto deadline =
@@ -428,7 +428,7 @@ TEST(Runtime, SourceErrorFailsAfterTheFramesBeforeIt) {
 
 TEST(Runtime, ProcessorErrorFailsAndStopsTheCapture) {
   FakeProcessor proc;
-  proc.before = [](const io::Frame& f) {
+  proc.before = [](const core::Frame& f) {
     if (f.index == 3) throw InvalidArgument("fake processor: frame 3 rejected");
   };
   // Endless source with a blocking ring: the capture thread must be woken to end.
@@ -446,7 +446,7 @@ TEST(Runtime, MismatchedFrameSizeIsAFatalErrorNamingTheFrame) {
   class Growing : public FakeSource {
    public:
     Growing() : FakeSource(10) {}
-    bool next(io::Frame& f) override {
+    bool next(core::Frame& f) override {
       const bool ok = FakeSource::next(f);
       if (ok && f.index == 2) f.depth = cv::Mat(kHeight * 2, kWidth, CV_32FC1, cv::Scalar(1.0f));
       return ok;
@@ -473,7 +473,7 @@ class FakeSensor : public FakeSource {
       : FakeSource(-1, 0, 0.002), plugged_(plugged) {
     if (!plugged_) throw IoError("fake sensor: no device");
   }
-  bool next(io::Frame& f) override {
+  bool next(core::Frame& f) override {
     if (!plugged_) throw fw::SensorDisconnected("fake sensor: disconnected");
     return FakeSource::next(f);
   }

@@ -47,8 +47,8 @@ std::string tempDir(const std::string& tag) {
   return p.string();
 }
 
-io::Intrinsics camera80x60() {
-  io::Intrinsics k;
+core::Intrinsics camera80x60() {
+  core::Intrinsics k;
   k.fx = k.fy = 80;
   k.cx = 39.5;
   k.cy = 29.5;

@@ -8,7 +8,7 @@
 
 #include "cl/cl_error.h"
 #include "cl/context.h"
-#include "io/frame.h"
+#include "core/frame.h"
 
 namespace emf::test {
 
@@ -18,7 +18,7 @@ std::string dataPath(const std::string& name);
 std::string tempDir(const std::string& tag);
 /// An 80x60 pinhole camera (fx = fy = 80, principal point at the centre) for tests that need
 /// only a small frame size.
-io::Intrinsics camera80x60();
+core::Intrinsics camera80x60();
 
 /// The whole file as text ("" when it cannot be read).
 std::string readText(const std::string& path);

@@ -1,13 +1,13 @@
 // Depth noise model: statistics on fronto-parallel planes against the model's sigma (axial part
 // alone, and with disparity quantisation against expectedStd), range limits, dropouts,
 // discontinuity effects and the projector shadow, determinism per seed.
-#include "io/synth/depth_noise.h"
+#include "synth/depth_noise.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-namespace emf::io::synth {
+namespace emf::synth {
 namespace {
 
 /// Measured standard deviation vs. the model's (relative); the acceptance bound.
@@ -217,4 +217,4 @@ TEST(SynthDepthNoise, DisabledCopiesExactDepth) {
 }
 
 }  // namespace
-}  // namespace emf::io::synth
+}  // namespace emf::synth

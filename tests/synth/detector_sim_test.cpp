@@ -1,6 +1,6 @@
 // Simulated detector: miss rate, false positives, shuffled ids, mask quality (IoU with the
 // ground-truth instance masks), scores, boxes, determinism.
-#include "io/synth/detector_sim.h"
+#include "synth/detector_sim.h"
 
 #include <gtest/gtest.h>
 
@@ -8,7 +8,7 @@
 #include <opencv2/imgproc.hpp>
 #include <set>
 
-namespace emf::io::synth {
+namespace emf::synth {
 namespace {
 
 /// Three objects of different sizes on a 320x240 instance image.
@@ -128,9 +128,9 @@ TEST(SynthDetector, DetectionFrames) {
 }
 
 }  // namespace
-}  // namespace emf::io::synth
+}  // namespace emf::synth
 
-namespace emf::io::synth {
+namespace emf::synth {
 namespace {
 
 // The gross flaws of the generated scenes' detector: each at rate 1 shows on every detection,
@@ -181,4 +181,4 @@ TEST(SynthDetector, GrossFlawsAtTheirRates) {
 }
 
 }  // namespace
-}  // namespace emf::io::synth
+}  // namespace emf::synth

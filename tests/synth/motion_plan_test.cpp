@@ -1,7 +1,7 @@
 // Motion programs (motion_plan.h) and keyframed / enveloped trajectories (trajectory.h): each
 // action ends where it says, a tipped box lands one side further on, rockers roll without
 // sliding, a drive stays on its loop within its speed limits and stops when told.
-#include "io/synth/motion_plan.h"
+#include "synth/motion_plan.h"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 
 #include "common/error.h"
 
-namespace emf::io::synth {
+namespace emf::synth {
 namespace {
 
 constexpr double kPi = 3.141592653589793;
@@ -134,4 +134,4 @@ TEST(Trajectory, SinusoidEnvelope) {
 }
 
 }  // namespace
-}  // namespace emf::io::synth
+}  // namespace emf::synth

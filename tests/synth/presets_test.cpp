@@ -1,6 +1,6 @@
 // Presets: every preset renders; camera motion is hand-held-like (speed and rotation per frame
 // bounded); objects are visible for long stretches; each preset's documented events happen.
-#include "io/synth/presets.h"
+#include "synth/presets.h"
 
 #include <gtest/gtest.h>
 
@@ -8,9 +8,9 @@
 #include <cmath>
 
 #include "common/error.h"
-#include "io/synth/synth_source.h"
+#include "synth/synth_source.h"
 
-namespace emf::io::synth {
+namespace emf::synth {
 namespace {
 
 constexpr double kRadToDeg = 57.29577951308232;
@@ -26,7 +26,7 @@ std::vector<std::vector<int>> pixelCounts(const std::string& preset, int* min_pi
   SynthSource src(o);
   *min_pixels = minVisiblePixels(64, 48);
   std::vector<std::vector<int>> counts;
-  Frame f;
+  core::Frame f;
   while (src.next(f)) {
     std::vector<int> c = instancePixelCounts(f.instance_ids);
     c.resize(src.scene().objects.size() + 1, 0);
@@ -94,12 +94,12 @@ TEST(SynthPresets, RoomIsStatic) {
   SynthSource src(o);
   EXPECT_EQ(src.size(), 300);
   for (int64_t i = 0; i < 300; i += 10) {
-    Frame f;
+    core::Frame f;
     src.renderFrame(i, &f);
     EXPECT_EQ(cv::countNonZero(f.instance_ids), 0) << i;  // every pixel is static scene
     EXPECT_TRUE(f.T_world_object_gt.empty());
     EXPECT_TRUE(f.detections.has_value() == (i % 30 == 0));
-    for (const auto& d : f.detections.value_or(std::vector<Detection>{})) {
+    for (const auto& d : f.detections.value_or(std::vector<core::Detection>{})) {
       EXPECT_LE(d.score, 0.75f);  // nothing to detect: only false positives
     }
   }
@@ -173,7 +173,7 @@ TEST(SynthPresets, EnterBringsALargeObjectInThroughTheBorder) {
   o.detector.every_n_frames = 0;
   SynthSource src(o);
   const int min_pixels = minVisiblePixels(64, 48);
-  Frame f;
+  core::Frame f;
   int first_visible = -1, run = 0, best_run = 0, max_pixels = 0;
   while (src.next(f)) {
     const auto c = instancePixelCounts(f.instance_ids);
@@ -194,4 +194,4 @@ TEST(SynthPresets, EnterBringsALargeObjectInThroughTheBorder) {
 }
 
 }  // namespace
-}  // namespace emf::io::synth
+}  // namespace emf::synth

@@ -1,15 +1,15 @@
 // Primitives: signed distances at known points, closed-form ray intersections against an
 // independent sphere tracer on the signed distance, normals against the SDF gradient.
-#include "io/synth/primitives.h"
+#include "synth/primitives.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
 
-#include "io/synth/rng.h"
+#include "synth/rng.h"
 
-namespace emf::io::synth {
+namespace emf::synth {
 namespace {
 
 /// Closed-form intersection vs. sphere-traced reference, metres.
@@ -163,4 +163,4 @@ TEST(SynthPrimitives, NormalsFollowTheSdfGradient) {
 }
 
 }  // namespace
-}  // namespace emf::io::synth
+}  // namespace emf::synth

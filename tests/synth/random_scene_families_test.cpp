@@ -6,10 +6,10 @@
 #include <set>
 #include <string>
 
-#include "io/synth/random_scene.h"
-#include "io/synth/scene.h"
+#include "synth/random_scene.h"
+#include "synth/scene.h"
 
-namespace emf::io::synth {
+namespace emf::synth {
 namespace {
 
 TEST(RandomScene, SeedsSpanEveryFamilyAndSize) {
@@ -52,4 +52,4 @@ TEST(RandomScene, SeedsSpanEveryFamilyAndSize) {
 }
 
 }  // namespace
-}  // namespace emf::io::synth
+}  // namespace emf::synth

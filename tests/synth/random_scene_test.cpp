@@ -1,6 +1,6 @@
 // The generated scenes (synth:random): deterministic per seed, every family drawn, objects in
 // view and apart, the camera within hand-held limits, options honoured, bad options named.
-#include "io/synth/random_scene.h"
+#include "synth/random_scene.h"
 
 #include <gtest/gtest.h>
 
@@ -10,11 +10,11 @@
 #include <set>
 
 #include "common/error.h"
-#include "io/synth/motion_plan.h"
-#include "io/synth/renderer.h"
-#include "io/synth/synth_source.h"
+#include "synth/motion_plan.h"
+#include "synth/renderer.h"
+#include "synth/synth_source.h"
 
-namespace emf::io::synth {
+namespace emf::synth {
 namespace {
 
 constexpr double kDeg = 3.141592653589793 / 180.0;
@@ -168,7 +168,7 @@ TEST(RandomScene, TheShortestSequencesAreGenerated) {
 }
 
 TEST(RandomScene, UriQueryKeys) {
-  SourceOptions none;
+  core::SourceOptions none;
   const SynthOptions o = synthOptionsFromQuery(
       "random", {{"seed", "5"}, {"movers", "3"}, {"camera", "xyz"}, {"motions", "spin,push"}},
       none);
@@ -193,7 +193,7 @@ TEST(RandomScene, SourceUsesTheScenesDetectorAndTheOverrides) {
                                           {"height", "60"},
                                           {"det_fp", "0"},
                                           {"det_late", "2"}},
-                                         SourceOptions{});
+                                         core::SourceOptions{});
   o.threads = 1;
   SynthSource src(o);
   const DetectorSimOptions expected = makeRandomScene(9,
@@ -207,13 +207,13 @@ TEST(RandomScene, SourceUsesTheScenesDetectorAndTheOverrides) {
   EXPECT_EQ(src.detector().false_positive_rate, 0.0);
   EXPECT_EQ(src.detector().late_frames, 2);
   // A late result on frame 30 is the detector's view of frame 28.
-  Frame f30, f28;
+  core::Frame f30, f28;
   src.renderFrame(30, &f30);
   src.renderFrame(28, &f28);
   ASSERT_TRUE(f30.detections.has_value());
   std::map<int, std::string> classes;
   for (const auto& obj : src.scene().objects) classes[obj.id] = obj.class_name;
-  const std::vector<Detection> seen =
+  const std::vector<core::Detection> seen =
       simulateDetections(f28.instance_ids, classes, o.seed, 30, src.detector());
   ASSERT_EQ(seen.size(), f30.detections->size());
   for (size_t i = 0; i < seen.size(); ++i) {
@@ -222,4 +222,4 @@ TEST(RandomScene, SourceUsesTheScenesDetectorAndTheOverrides) {
 }
 
 }  // namespace
-}  // namespace emf::io::synth
+}  // namespace emf::synth

@@ -1,6 +1,6 @@
 // Renderer: exact depth and instance ids of known geometry (noise off) against analytic
 // references computed independently here, the lighting model on a known face, intrinsics.
-#include "io/synth/renderer.h"
+#include "synth/renderer.h"
 
 #include <gtest/gtest.h>
 
@@ -8,7 +8,7 @@
 
 #include "common/error.h"
 
-namespace emf::io::synth {
+namespace emf::synth {
 namespace {
 
 constexpr double kPi = 3.141592653589793;
@@ -55,12 +55,12 @@ double boxReference(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Ei
 }
 
 TEST(SynthRenderer, DefaultIntrinsicsAreKinectLikeAndScale) {
-  const Intrinsics k = defaultIntrinsics(640, 480);
+  const core::Intrinsics k = defaultIntrinsics(640, 480);
   EXPECT_DOUBLE_EQ(k.fx, 525.0);
   EXPECT_DOUBLE_EQ(k.fy, 525.0);
   EXPECT_DOUBLE_EQ(k.cx, 319.5);
   EXPECT_DOUBLE_EQ(k.cy, 239.5);
-  const Intrinsics h = defaultIntrinsics(320, 240);
+  const core::Intrinsics h = defaultIntrinsics(320, 240);
   EXPECT_DOUBLE_EQ(h.fx, 262.5);
   EXPECT_DOUBLE_EQ(h.cx, 159.5);
   EXPECT_EQ(h.width, 320);
@@ -89,7 +89,7 @@ TEST(SynthRenderer, WallAndRotatedBoxMatchAnalyticDepthAndIds) {
   Renderer renderer(ro);
   RenderOutput out;
   renderer.render(scene, T_world_camera, {T_world_box}, &out);
-  const Intrinsics& K = renderer.intrinsics();
+  const core::Intrinsics& K = renderer.intrinsics();
 
   const Eigen::Isometry3d T_box_camera = T_world_box.inverse() * T_world_camera;
   int box_pixels = 0, wall_pixels = 0, checked = 0;
@@ -133,7 +133,7 @@ TEST(SynthRenderer, FloorSeenFromAPitchedCameraMatchesPlaneDepth) {
   Renderer renderer(ro);
   RenderOutput out;
   renderer.render(scene, T_world_camera, {}, &out);
-  const Intrinsics& K = renderer.intrinsics();
+  const core::Intrinsics& K = renderer.intrinsics();
   int hits = 0, misses = 0;
   for (int v = 0; v < K.height; ++v) {
     for (int u = 0; u < K.width; ++u) {
@@ -201,4 +201,4 @@ TEST(SynthRenderer, RejectsBadSizesAndPoseCounts) {
 }
 
 }  // namespace
-}  // namespace emf::io::synth
+}  // namespace emf::synth

@@ -1,23 +1,23 @@
 // The synth: source: query parsing and errors, determinism per seed, frame contents, and the
 // consistency of depth, instance ids and ground-truth poses (points on an object's pixels lie
 // on that object's surface).
-#include "io/synth/synth_source.h"
+#include "synth/synth_source.h"
 
 #include <gtest/gtest.h>
 
 #include <cstring>
 
 #include "common/error.h"
-#include "io/synth/presets.h"
+#include "synth/presets.h"
 
-namespace emf::io::synth {
+namespace emf::synth {
 namespace {
 
 /// Back-projected pixels of object k vs. its surface (noise off): float depth rounding only.
 constexpr double kSurfaceToleranceM = 1e-4;
 
 std::string errorOf(const std::string& preset, const std::map<std::string, std::string>& query,
-                    const SourceOptions& options = {}) {
+                    const core::SourceOptions& options = {}) {
   try {
     openSynthSource(preset, query, options);
   } catch (const IoError& e) {
@@ -66,7 +66,7 @@ TEST(SynthSource, QueryParametersAndErrors) {
 }
 
 TEST(SynthSource, SourceOptionsOverrideCameraAndCapFrames) {
-  SourceOptions so;
+  core::SourceOptions so;
   so.fx = 300;
   so.cy = 50;
   so.max_frames = 4;
@@ -87,11 +87,11 @@ TEST(SynthSource, DeterministicPerSeed) {
     o.width = 160;
     o.height = 120;
     o.seed = seed;
-    Frame f;
+    core::Frame f;
     SynthSource(o).renderFrame(index, &f);
     return f;
   };
-  const Frame a = render(5, 30), b = render(5, 30), c = render(6, 30);
+  const core::Frame a = render(5, 30), b = render(5, 30), c = render(6, 30);
   EXPECT_TRUE(sameBytes(a.depth, b.depth));
   EXPECT_TRUE(sameBytes(a.color, b.color));
   ASSERT_TRUE(a.detections && b.detections);
@@ -116,7 +116,7 @@ TEST(SynthSource, FramesCarryTimestampsGroundTruthAndDetections) {
   o.height = 48;
   o.detector.every_n_frames = 3;
   SynthSource src(o);
-  Frame f;
+  core::Frame f;
   int64_t n = 0;
   while (src.next(f)) {
     EXPECT_EQ(f.index, n);
@@ -152,10 +152,10 @@ TEST(SynthSource, DepthIdsAndPosesAreConsistent) {
     o.height = 120;
     o.noise = false;
     SynthSource src(o);
-    const Intrinsics K = src.intrinsics();
+    const core::Intrinsics K = src.intrinsics();
     int checked = 0;
     for (int64_t index : {int64_t{100}, int64_t{200}, int64_t{250}}) {
-      Frame f;
+      core::Frame f;
       src.renderFrame(index, &f);
       for (const auto& obj : src.scene().objects) {
         const Eigen::Isometry3d T_object_camera =
@@ -184,4 +184,4 @@ TEST(SynthSource, DepthIdsAndPosesAreConsistent) {
 }
 
 }  // namespace
-}  // namespace emf::io::synth
+}  // namespace emf::synth

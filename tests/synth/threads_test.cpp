@@ -6,10 +6,10 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "io/synth/parallel.h"
-#include "io/synth/synth_source.h"
+#include "synth/parallel.h"
+#include "synth/synth_source.h"
 
-namespace emf::io::synth {
+namespace emf::synth {
 namespace {
 
 bool sameBytes(const cv::Mat& a, const cv::Mat& b) {
@@ -18,7 +18,7 @@ bool sameBytes(const cv::Mat& a, const cv::Mat& b) {
 }
 
 TEST(SynthThreads, OutputDoesNotDependOnThreadCount) {
-  Frame frames[3];
+  core::Frame frames[3];
   const int thread_counts[3] = {1, 2, 5};
   for (int k = 0; k < 3; ++k) {
     SynthOptions o;
@@ -53,4 +53,4 @@ TEST(SynthThreads, ParallelForCoversEveryIndexOnceAndRethrows) {
 }
 
 }  // namespace
-}  // namespace emf::io::synth
+}  // namespace emf::synth

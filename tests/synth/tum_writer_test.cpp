@@ -12,7 +12,7 @@
 
 #include "common/error.h"
 #include "io/atomic_output.h"
-#include "io/synth/synth_source.h"
+#include "synth/synth_source.h"
 #include "test_support.h"
 
 namespace emf::io {
@@ -65,10 +65,10 @@ TEST(TumWriter, WritesEveryFileWithTheFramesContent) {
   synth::SynthSource src(o);
   TumWriterOptions wo;
   wo.readme_about = "About this test sequence.";
-  std::vector<Frame> frames;
+  std::vector<core::Frame> frames;
   {
     TumWriter writer(dir, src.intrinsics(), wo);
-    Frame f;
+    core::Frame f;
     // Start late so the suitcase (object 2) enters view during the written frames.
     for (int64_t i = 0; i < 6; ++i) {
       src.renderFrame(60 + 20 * i, &f);
@@ -88,7 +88,7 @@ TEST(TumWriter, WritesEveryFileWithTheFramesContent) {
   ASSERT_EQ(gt.size(), 6u);
   EXPECT_EQ(lines(dir + "/rgb.txt", false).size(), 9u);  // 3 comment lines, as TUM's
   for (size_t i = 0; i < frames.size(); ++i) {
-    const Frame& f = frames[i];
+    const core::Frame& f = frames[i];
     const std::string t = f.timestamp_text;
     EXPECT_EQ(rgb[i], t + " rgb/" + t + ".png");
     EXPECT_EQ(depth[i], t + " depth/" + t + ".png");
@@ -124,14 +124,14 @@ TEST(TumWriter, WritesEveryFileWithTheFramesContent) {
     ASSERT_EQ(ids.size(), f.depth.size());
     const auto det_lines = lines(dir + "/masks/" + t + ".txt", false);
     // Detections hidden entirely under higher-scoring ones are not listed.
-    std::vector<const Detection*> listed;
+    std::vector<const core::Detection*> listed;
     for (const auto& d : *f.detections) {
       if (cv::countNonZero(ids == d.id) > 0) listed.push_back(&d);
     }
     ASSERT_EQ(det_lines.size(), listed.size());
     ASSERT_FALSE(det_lines.empty());
     for (size_t k = 0; k < det_lines.size(); ++k) {
-      const Detection& d = *listed[k];
+      const core::Detection& d = *listed[k];
       std::istringstream is(det_lines[k]);
       int id;
       std::string cls;
@@ -156,7 +156,7 @@ TEST(TumWriter, WritesEveryFileWithTheFramesContent) {
     }
     // Every painted pixel belongs to a listed detection.
     cv::Mat listed_pixels = cv::Mat::zeros(ids.size(), CV_8U);
-    for (const Detection* d : listed) listed_pixels |= (ids == d->id);
+    for (const core::Detection* d : listed) listed_pixels |= (ids == d->id);
     EXPECT_EQ(cv::countNonZero((ids > 0) & ~listed_pixels), 0);
   }
   // Class names with spaces are written with '_' (the teddy bear is usually detected).
@@ -175,7 +175,7 @@ TEST(TumWriter, WritesEveryFileWithTheFramesContent) {
     ASSERT_EQ(world.size(), 6u);
     size_t c = 0;
     for (size_t i = 0; i < frames.size(); ++i) {
-      const Frame& f = frames[i];
+      const core::Frame& f = frames[i];
       const auto [tw, Tw] = parsePose(world[i]);
       EXPECT_EQ(tw, f.timestamp_text);
       expectPoseNear(Tw, f.T_world_object_gt.at(id), "object world");
@@ -207,14 +207,14 @@ TEST(TumWriter, WritesEveryFileWithTheFramesContent) {
 
 TEST(TumWriter, RejectsBadFramesNamingThem) {
   const std::string dir = test::tempDir("tum-writer-bad");
-  Intrinsics k;
+  core::Intrinsics k;
   k.fx = k.fy = 50;
   k.cx = 15.5;
   k.cy = 11.5;
   k.width = 32;
   k.height = 24;
   TumWriter writer(dir, k);
-  Frame f;
+  core::Frame f;
   f.index = 7;
   f.timestamp_text = "0.233333";
   f.depth = cv::Mat(24, 32, CV_16U, cv::Scalar(1000));

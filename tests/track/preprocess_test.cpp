@@ -20,7 +20,7 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
 // Runs the device path and compares every pixel with the reference. Returns the number of
 // valid pixels.
-int compareWithReference(cl::Context& ctx, const cv::Mat& depth, const io::Intrinsics& k,
+int compareWithReference(cl::Context& ctx, const cv::Mat& depth, const core::Intrinsics& k,
                          const PreprocessOptions& o) {
   Preprocessor pre(ctx, o, k);
   pre.process(depth);
@@ -138,7 +138,7 @@ cv::Mat constructedDepth(int w, int h) {
 
 TEST_F(Preprocess, ConstructedEdgesAndHolesMatchReference) {
   const int w = 67, h = 45;  // not multiples of the work-group size
-  io::Intrinsics k;
+  core::Intrinsics k;
   k.fx = 60;
   k.fy = 58;
   k.cx = 33.0;
@@ -222,7 +222,7 @@ TEST(PreprocessReference, HoleMarginDropsThePixelsNextToMissingDepthOnly) {
 TEST(PreprocessReference, RangeGuardDropsTheDepthNearTheFrameLimitNextToHoles) {
   constexpr float kLimitToleranceM = 1e-6f;
   const int w = 60, h = 30, r = PreprocessOptions().bilateral_radius_px;
-  io::Intrinsics k;
+  core::Intrinsics k;
   k.fx = k.fy = 40;
   k.cx = 29.5;
   k.cy = 14.5;
@@ -285,7 +285,7 @@ TEST(PreprocessReference, RangeGuardDropsTheDepthNearTheFrameLimitNextToHoles) {
 
 TEST(PreprocessReference, SemanticsOnConstructedDepth) {
   const int w = 67, h = 45;
-  io::Intrinsics k;
+  core::Intrinsics k;
   k.fx = 60;
   k.fy = 58;
   k.cx = 33.0;
@@ -339,8 +339,8 @@ TEST(PreprocessReference, SemanticsOnConstructedDepth) {
 }
 
 // A w x h pinhole camera with focal length f (px) and the principal point at the image centre.
-io::Intrinsics centredCamera(int w, int h, double f) {
-  io::Intrinsics k;
+core::Intrinsics centredCamera(int w, int h, double f) {
+  core::Intrinsics k;
   k.fx = k.fy = f;
   k.cx = 0.5 * (w - 1);
   k.cy = 0.5 * (h - 1);
@@ -355,7 +355,7 @@ io::Intrinsics centredCamera(int w, int h, double f) {
 // the true plane over the image's interior.
 double staircaseError(const PreprocessOptions& o, bool device, cl::Context* ctx) {
   const int w = 64, h = 24;
-  const io::Intrinsics k = centredCamera(w, h, 525.0);
+  const core::Intrinsics k = centredCamera(w, h, 525.0);
   const double fb = 525.0 * 0.075, step_px = 0.125;
   cv::Mat truth(h, w, CV_32F), depth(h, w, CV_32F);
   std::mt19937 rng(5);
@@ -416,7 +416,7 @@ TEST_F(Preprocess, FarQuantisationStepsAreSmoothedNotKeptAsEdges) {
 // 0.02 would give 24 mm next to the edge).
 TEST(PreprocessReference, ThirtyCentimetreEdgeAtTwoMetresStaysSharp) {
   const int w = 32, h = 16;
-  const io::Intrinsics k = centredCamera(w, h, 525.0);
+  const core::Intrinsics k = centredCamera(w, h, 525.0);
   cv::Mat depth(h, w, CV_32F);
   for (int v = 0; v < h; ++v) {
     for (int u = 0; u < w; ++u) depth.at<float>(v, u) = u < w / 2 ? 2.0f : 2.3f;
@@ -431,7 +431,7 @@ TEST(PreprocessReference, ThirtyCentimetreEdgeAtTwoMetresStaysSharp) {
 }
 
 TEST_F(Preprocess, BadInputIsAClearError) {
-  io::Intrinsics k = test::kinectCamera();
+  core::Intrinsics k = test::kinectCamera();
   PreprocessOptions o;
   Preprocessor pre(ctx(), o, k);
   try {

@@ -15,11 +15,11 @@
 #include <vector>
 
 #include "cl/context.h"
-#include "common/config.h"
-#include "io/synth/synth_source.h"
 #include "map/volume.h"
 #include "map/voxel_pool.h"
+#include "pipeline/config.h"
 #include "pipeline/slam_system.h"
+#include "synth/synth_source.h"
 #include "track/preprocess.h"
 #include "track/tracker.h"
 
@@ -33,21 +33,21 @@ constexpr double kMinFlipWithoutGuardMm = 1.8;
 constexpr double kMaxFlipWithGuardMm = 1.6;
 
 struct Sequence {
-  io::Intrinsics k;
+  core::Intrinsics k;
   std::vector<cv::Mat> depth;
   std::vector<Eigen::Isometry3d> gt;
 };
 
 Sequence renderRoom() {
-  io::synth::SynthOptions so;
+  synth::SynthOptions so;
   so.preset = "room";
   so.frames = kFrames;
   so.width = 320;
   so.height = 240;
-  io::synth::SynthSource src(so);
+  synth::SynthSource src(so);
   Sequence s;
   s.k = src.intrinsics();
-  io::Frame f;
+  core::Frame f;
   while (src.next(f)) {
     s.depth.push_back(f.depth.clone());
     s.gt.push_back(*f.T_world_camera_gt);

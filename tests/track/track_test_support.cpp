@@ -63,7 +63,7 @@ HostVolume volumeFromSdf(const SdfFunction& sdf, const Eigen::Vector3i& dims_blo
   return vol;
 }
 
-void fuseDepth(HostVolume* vol, const cv::Mat& depth_m, const io::Intrinsics& k,
+void fuseDepth(HostVolume* vol, const cv::Mat& depth_m, const core::Intrinsics& k,
                const Eigen::Isometry3d& T_volume_camera, float max_weight) {
   const float vs = vol->voxel_size_m, tr = vol->truncation_m;
   const Eigen::Isometry3f T = T_volume_camera.cast<float>();
@@ -147,7 +147,7 @@ float AnalyticScene::sdf(const Eigen::Vector3f& x) const {
   return s;
 }
 
-cv::Mat AnalyticScene::render(const io::Intrinsics& k, const Eigen::Isometry3d& T_volume_camera,
+cv::Mat AnalyticScene::render(const core::Intrinsics& k, const Eigen::Isometry3d& T_volume_camera,
                               float max_depth) const {
   cv::Mat depth(k.height, k.width, CV_32F, cv::Scalar(kNaN));
   const Eigen::Vector3d o = T_volume_camera.translation();
@@ -212,8 +212,8 @@ Eigen::Isometry3d roomCornerCamera() {
   return lookAt(Eigen::Vector3d(2.0, 1.2, 0.3), Eigen::Vector3d(0.9, 1.8, 1.9));
 }
 
-io::Intrinsics smallCamera() {
-  io::Intrinsics k;
+core::Intrinsics smallCamera() {
+  core::Intrinsics k;
   k.fx = k.fy = 262.5;
   k.cx = 159.5;
   k.cy = 119.5;
@@ -222,8 +222,8 @@ io::Intrinsics smallCamera() {
   return k;
 }
 
-io::Intrinsics kinectCamera() {
-  io::Intrinsics k;
+core::Intrinsics kinectCamera() {
+  core::Intrinsics k;
   k.fx = k.fy = 525.0;
   k.cx = 319.5;
   k.cy = 239.5;

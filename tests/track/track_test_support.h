@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "cl/context.h"
-#include "io/frame.h"
+#include "core/frame.h"
 #include "map/volume_view.h"
 #include "map/voxel_layout.h"
 
@@ -46,7 +46,7 @@ HostVolume volumeFromSdf(const SdfFunction& sdf, const Eigen::Vector3i& dims_blo
 /// Simple CPU reference TSDF fusion (projective distance, running average, weight cap) of one
 /// depth image (CV_32F metres, NaN invalid) seen from T_volume_camera. Allocates the blocks
 /// within truncation of the observed surface along each pixel's ray.
-void fuseDepth(HostVolume* volume, const cv::Mat& depth_m, const io::Intrinsics& intrinsics,
+void fuseDepth(HostVolume* volume, const cv::Mat& depth_m, const core::Intrinsics& intrinsics,
                const Eigen::Isometry3d& T_volume_camera, float max_weight);
 
 /// The volume's buffers on the device and the view kernels take.
@@ -72,7 +72,7 @@ struct AnalyticScene {
   float sdf(const Eigen::Vector3f& x) const;
   /// Depth image (CV_32F metres, NaN where a ray hits nothing within max_depth) seen from
   /// T_volume_camera.
-  cv::Mat render(const io::Intrinsics& intrinsics, const Eigen::Isometry3d& T_volume_camera,
+  cv::Mat render(const core::Intrinsics& intrinsics, const Eigen::Isometry3d& T_volume_camera,
                  float max_depth = 8.0f) const;
 };
 
@@ -85,9 +85,9 @@ Eigen::Isometry3d roomCornerCamera();
 Eigen::Isometry3d lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target);
 
 /// 320x240 pinhole camera (fx = fy = 262.5).
-io::Intrinsics smallCamera();
+core::Intrinsics smallCamera();
 /// Kinect-like 640x480 camera (f 525 px, centre 319.5, 239.5), as the TUM RGB-D frames.
-io::Intrinsics kinectCamera();
+core::Intrinsics kinectCamera();
 
 /// Random unit vector.
 Eigen::Vector3d randomUnit(std::mt19937& rng);

@@ -9,9 +9,9 @@
 #include <random>
 
 #include "common/error.h"
-#include "io/synth/depth_noise.h"
-#include "io/synth/presets.h"
-#include "io/synth/renderer.h"
+#include "synth/depth_noise.h"
+#include "synth/presets.h"
+#include "synth/renderer.h"
 #include "test_support.h"
 #include "track/preprocess.h"
 #include "track_test_support.h"
@@ -47,7 +47,7 @@ struct SyntheticWorld {
   test::AnalyticScene scene;
   std::unique_ptr<test::HostVolume> host;
   test::DeviceVolume device;
-  io::Intrinsics intrinsics;
+  core::Intrinsics intrinsics;
   Eigen::Isometry3d T_volume_camera_gt;
   cv::Mat depth;
 };
@@ -142,7 +142,7 @@ TEST_F(TrackerTest, SyntheticDepthCoversTheScene) {
   EXPECT_LT(hi, 3.5);
   // The analytic SDF is zero at rendered surface points.
   const Eigen::Isometry3d T = room_->T_volume_camera_gt;
-  const io::Intrinsics& k = room_->intrinsics;
+  const core::Intrinsics& k = room_->intrinsics;
   for (int v = 0; v < k.height; v += 17) {
     for (int u = 0; u < k.width; u += 13) {
       const double z = d.at<float>(v, u);
@@ -153,7 +153,7 @@ TEST_F(TrackerTest, SyntheticDepthCoversTheScene) {
 }
 
 TEST_F(TrackerTest, AccumulationMatchesReferenceSynthetic) {
-  const io::Intrinsics& k = room_->intrinsics;
+  const core::Intrinsics& k = room_->intrinsics;
   PreprocessOptions po;
   const PreprocessedFrame frame = preprocessReference(room_->depth, k, po);
   cl::MemHandle vertex =
@@ -214,9 +214,10 @@ TEST_F(TrackerTest, AccumulationMatchesReferenceSynthetic) {
     EXPECT_EQ(dev.strict_inliers, ref_s3.strict_inliers);
     EXPECT_GT(dev.cost, ref_s3.cost * 1.05);
   }
-  for (const std::string reduction : {"host", "device"}) {
+  for (const auto& [final_reduction, name] : finalReductionNames()) {
+    const std::string reduction = name;
     TrackOptions o;
-    o.final_reduction = reduction;
+    o.final_reduction = final_reduction;
     Tracker tracker(ctx(), o, k.width, k.height);
     for (int stride : {1, 3}) {
       SCOPED_TRACE(reduction + " reduction, stride " + std::to_string(stride));
@@ -264,7 +265,7 @@ UnevenWeightsCase unevenWeightsCase(const SyntheticWorld& room) {
 TEST_F(TrackerTest, CostChangeOverCommonPixelsMatchesReference) {
   // The step-acceptance terms: per-pixel costs and weights of one evaluation compared with the
   // next, for both acceptance rules (track.step_acceptance).
-  const io::Intrinsics& k = room_->intrinsics;
+  const core::Intrinsics& k = room_->intrinsics;
   const auto [frame, uneven, delta] = unevenWeightsCase(*room_);
   cl::MemHandle vertex =
       ctx().buffer(CL_MEM_READ_ONLY, frame.vertex.total() * sizeof(cv::Vec4f), frame.vertex.data);
@@ -275,10 +276,11 @@ TEST_F(TrackerTest, CostChangeOverCommonPixelsMatchesReference) {
   double change_by_rule[2] = {};
   for (const bool fixed : {false, true}) {
     TrackOptions options;
-    options.step_acceptance = fixed ? "fixed_weights" : "cost";
+    options.step_acceptance = fixed ? StepAcceptance::kFixedWeights : StepAcceptance::kCost;
     Tracker tracker(ctx(), options, k.width, k.height);
     for (int stride : {2, 3}) {  // (stride 1 is covered above; keeps sanitizer runs short)
-      SCOPED_TRACE(options.step_acceptance + ", stride " + std::to_string(stride));
+      SCOPED_TRACE(std::string(choiceName(options.step_acceptance, stepAcceptanceNames())) +
+                   ", stride " + std::to_string(stride));
       cv::Mat cost1, cost2;
       accumulateReference(uneven.view(), frame.vertex, cv::Mat(), stride, T1, delta, nullptr,
                           &cost1, 0.0, fixed);
@@ -344,7 +346,7 @@ TEST_F(TrackerTest, FixedWeightsAcceptanceAgreesWithTheModelOnSmallSteps) {
 TEST_F(TrackerTest, PointJacobianMatchesFiniteDifferences) {
   // J = d psi(exp(delta) x) / d delta = (grad, x cross grad), the terms the kernel accumulates.
   const map::VolumeHostView vol = room_->host->view();
-  const io::Intrinsics& k = room_->intrinsics;
+  const core::Intrinsics& k = room_->intrinsics;
   std::mt19937 rng(31);
   const Eigen::Isometry3d T = perturb(room_->T_volume_camera_gt, rng, 0.01, 1 * kDeg);
   const double h = 1e-4;
@@ -393,7 +395,7 @@ TEST_F(TrackerTest, PointJacobianMatchesFiniteDifferences) {
 TEST_F(TrackerTest, GradientOfReferenceCostMatchesFiniteDifferences) {
   // With uniform map weights the confidence is constant, so g = dE/d(delta) exactly (Huber is
   // C1). Checks the sign conventions of g, the Huber weights and the left increment.
-  const io::Intrinsics& k = room_->intrinsics;
+  const core::Intrinsics& k = room_->intrinsics;
   const PreprocessedFrame frame = preprocessReference(room_->depth, k, PreprocessOptions{});
   std::mt19937 rng(41);
   const Eigen::Isometry3d T = perturb(room_->T_volume_camera_gt, rng, 0.03, 2 * kDeg);
@@ -470,7 +472,7 @@ TEST_F(TrackerTest, ConvergesWithDefaultCoarseToFineAndEarlyExit) {
   TrackOptions o;  // defaults: 2 coarse levels, early exit
   ASSERT_GT(o.coarse_levels, 0);
   ASSERT_GT(o.early_exit_step, 0.0);
-  o.final_reduction = "device";
+  o.final_reduction = FinalReduction::kDevice;
   expectConvergence(ctx(), *room_, o, 6, 52);
 }
 
@@ -482,12 +484,12 @@ TEST_F(TrackerTest, FirstFrameOfTheCarsSceneIsTrackedNotLeftAtThePrediction) {
   // (noise-free `cars` runs: the first 10 frames up to 3.6 cm off). Measured now: 1.1 mm (1e3)
   // and 0.9 mm (the default), the bias of a map made of one projective frame.
   constexpr double kTrackedM = 2e-3;
-  io::synth::Scene scene = io::synth::makePreset("cars");
+  synth::Scene scene = synth::makePreset("cars");
   scene.objects.clear();
-  io::synth::RenderOptions ro;
-  const io::synth::Renderer renderer(ro);
-  const io::Intrinsics& k = renderer.intrinsics();
-  io::synth::RenderOutput f0, f1;
+  synth::RenderOptions ro;
+  const synth::Renderer renderer(ro);
+  const core::Intrinsics& k = renderer.intrinsics();
+  synth::RenderOutput f0, f1;
   const Eigen::Isometry3d T_world_c0 = scene.camera.pose(scene.timeOf(0));
   const Eigen::Isometry3d T_world_c1 = scene.camera.pose(scene.timeOf(1));
   renderer.render(scene, T_world_c0, {}, &f0);
@@ -519,15 +521,12 @@ TEST_F(TrackerTest, ConvergesWithPixelStride) {
 }
 
 TEST_F(TrackerTest, ConvergesAboutEveryRotationCentre) {
-  for (const char* centre : {"camera", "stiffness", "origin"}) {
-    SCOPED_TRACE(centre);
+  for (const auto& [centre, name] : rotationCentreNames()) {
+    SCOPED_TRACE(name);
     TrackOptions o;
     o.rotation_centre = centre;
     expectConvergence(ctx(), *room_, o, 3, 54);
   }
-  TrackOptions bad;
-  bad.rotation_centre = "volume";
-  EXPECT_THROW(Tracker(ctx(), bad, 320, 240), ConfigError);
 }
 
 TEST_F(TrackerTest, StartingAtTheSolutionStaysThere) {
@@ -563,14 +562,14 @@ TEST_F(TrackerTest, MotionPriorBalancesTheDataTermAtTheResult) {
   // clearly between the truth and the start; a prior far stiffer than the data keeps the start.
   constexpr double kBalanceRelTolerance = 0.01;  // of max |Lambda d| (float device sums)
   constexpr double kStiffPriorMotionM = 1e-4;
-  const io::Intrinsics& k = room_->intrinsics;
+  const core::Intrinsics& k = room_->intrinsics;
   const PreprocessedFrame frame = preprocessReference(room_->depth, k, PreprocessOptions{});
   cl::MemHandle vertex =
       ctx().buffer(CL_MEM_READ_ONLY, frame.vertex.total() * sizeof(cv::Vec4f), frame.vertex.data);
   TrackOptions o;
   o.coarse_levels = 0;
   o.pixel_stride = 1;
-  o.rotation_centre = "origin";
+  o.rotation_centre = RotationCentre::kOrigin;
   o.early_exit_step = 0.0;
   const double delta = o.huber_truncation_factor * room_->host->truncation_m;
   const NormalEquations at_gt = accumulateReference(room_->host->view(), frame.vertex, cv::Mat(), 1,
@@ -706,17 +705,17 @@ TEST_F(TrackerTest, AfterALostFrameTheRecoveryInlierRatioApplies) {
   o.recovery_min_inlier_ratio = 0.9;
   std::mt19937 rng(81);
   const Eigen::Isometry3d init = perturb(room_->T_volume_camera_gt, rng, 0.05, 5 * kDeg);
-  const cl_mem index = room_->device.view.index;
+  const uint64_t key = room_->device.view.volume_key;
   Tracker fresh(ctx(), o, room_->intrinsics.width, room_->intrinsics.height);
   const TrackResult ok = fresh.track(room_->device.view, pre.vertexMap().get(), nullptr, init);
   ASSERT_FALSE(ok.lost) << ok.loss_reason;
   ASSERT_GT(ok.inlier_ratio, o.min_inlier_ratio);
   ASSERT_LT(ok.strict_inlier_ratio, o.recovery_min_inlier_ratio);
-  EXPECT_FALSE(fresh.recovering(index));
+  EXPECT_FALSE(fresh.recovering(key));
 
   Tracker t(ctx(), o, room_->intrinsics.width, room_->intrinsics.height);
   EXPECT_TRUE(t.track(room_->device.view, pre_empty.vertexMap().get(), nullptr, init).lost);
-  EXPECT_TRUE(t.recovering(index));
+  EXPECT_TRUE(t.recovering(key));
   const TrackResult r = t.track(room_->device.view, pre.vertexMap().get(), nullptr, init);
   EXPECT_TRUE(r.lost);
   EXPECT_EQ(r.loss, TrackLoss::kFewInliers);
@@ -731,7 +730,24 @@ TEST_F(TrackerTest, AfterALostFrameTheRecoveryInlierRatioApplies) {
       t2.track(room_->device.view, pre.vertexMap().get(), nullptr, room_->T_volume_camera_gt);
   EXPECT_FALSE(good.lost) << good.loss_reason;
   EXPECT_GE(good.strict_inlier_ratio, o.recovery_min_inlier_ratio);
-  EXPECT_FALSE(t2.recovering(index));
+  EXPECT_FALSE(t2.recovering(key));
+}
+
+TEST_F(TrackerTest, TheRecoveryStateBelongsToTheVolumeKey) {
+  // Two volumes with the same buffers but different keys (as a volume keeps its key when it
+  // grows and its index buffer is replaced): a lost call marks only its own key.
+  RecoveryFrames frames(ctx());
+  map::VolumeDeviceView a = room_->device.view, b = room_->device.view;
+  a.volume_key = 7;
+  b.volume_key = 8;
+  Tracker t(ctx(), TrackOptions{}, room_->intrinsics.width, room_->intrinsics.height);
+  EXPECT_TRUE(t.track(a, frames.empty.vertexMap().get(), nullptr, room_->T_volume_camera_gt).lost);
+  EXPECT_TRUE(t.recovering(7));
+  EXPECT_FALSE(t.recovering(8));
+  EXPECT_FALSE(t.track(b, frames.room.vertexMap().get(), nullptr, room_->T_volume_camera_gt).lost);
+  EXPECT_TRUE(t.recovering(7));
+  t.forget(7);
+  EXPECT_FALSE(t.recovering(7));
 }
 
 TEST_F(TrackerTest, RecoveryOnlyReacquiresNearTheLastTrackedPose) {
@@ -758,7 +774,7 @@ TEST_F(TrackerTest, RecoveryOnlyReacquiresNearTheLastTrackedPose) {
   EXPECT_TRUE(r.lost);
   EXPECT_EQ(r.loss, TrackLoss::kLargeMotion);
   EXPECT_NE(r.loss_reason.find("track.recovery_max_motion_m"), std::string::npos) << r.loss_reason;
-  EXPECT_TRUE(t.recovering(room_->device.view.index));
+  EXPECT_TRUE(t.recovering(room_->device.view.volume_key));
   // The rotation limit alone refuses it too; within both limits it is re-acquired.
   o.recovery_max_motion_m = 0.1;
   o.recovery_max_motion_deg = 2.0;
@@ -771,7 +787,7 @@ TEST_F(TrackerTest, RecoveryOnlyReacquiresNearTheLastTrackedPose) {
   EXPECT_TRUE(t_ok.track(room_->device.view, pre_empty.vertexMap().get(), nullptr, init).lost);
   const TrackResult back = t_ok.track(room_->device.view, pre.vertexMap().get(), nullptr, init);
   EXPECT_FALSE(back.lost) << back.loss_reason;
-  EXPECT_FALSE(t_ok.recovering(room_->device.view.index));
+  EXPECT_FALSE(t_ok.recovering(room_->device.view.volume_key));
 }
 
 TEST_F(TrackerTest, FarNoisyDepthAtTheRightPoseIsNotLost) {
@@ -787,13 +803,13 @@ TEST_F(TrackerTest, FarNoisyDepthAtTheRightPoseIsNotLost) {
   // enough that the strict ratio passes: 0.77.)
   constexpr double kNoisyPoseToleranceM = 0.015;
   constexpr double kRatioTolerance = 0.02;
-  const io::Intrinsics& k = room_->intrinsics;
+  const core::Intrinsics& k = room_->intrinsics;
   Eigen::Isometry3d back = Eigen::Isometry3d::Identity();
   back.translation() = Eigen::Vector3d(0.0, 0.0, -kBackM);
   const cv::Mat exact = room_->scene.render(k, room_->T_volume_camera_gt * back);
-  io::synth::DepthNoiseOptions noise;
+  synth::DepthNoiseOptions noise;
   noise.max_range_m = 7.0;
-  const io::synth::DepthNoiseModel noise_model(noise);
+  const synth::DepthNoiseModel noise_model(noise);
   cv::Mat first, second;
   noise_model.apply(exact, cv::Mat(), k.fx, 7, 0, &first);
   noise_model.apply(exact, cv::Mat(), k.fx, 7, 1, &second);
@@ -836,7 +852,7 @@ TEST_F(TrackerTest, EmptyFrameIsLostWithoutDepth) {
 TEST_F(TrackerTest, RegionOfInterestGivesTheWholeImageResult) {
   // q is zero outside a rectangle (an object's projected box): evaluating only the rectangle
   // must give the whole image's terms, at every stride (odd corners exercise the grid rounding).
-  const io::Intrinsics& k = room_->intrinsics;
+  const core::Intrinsics& k = room_->intrinsics;
   const PreprocessedFrame frame = preprocessReference(room_->depth, k, PreprocessOptions{});
   cl::MemHandle vertex =
       ctx().buffer(CL_MEM_READ_ONLY, frame.vertex.total() * sizeof(cv::Vec4f), frame.vertex.data);
@@ -885,7 +901,7 @@ TEST_F(TrackerTest, RegionOfInterestGivesTheWholeImageResult) {
 }
 
 TEST(VolumeImageBounds, HoldsEveryProjectedPointOfTheBoxAndIsTight) {
-  const io::Intrinsics k = test::kinectCamera();
+  const core::Intrinsics k = test::kinectCamera();
   const Eigen::Vector3d extent(0.6, 0.4, 0.5);
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -954,9 +970,6 @@ TEST_F(TrackerTest, AccumulationKernelFitsTheLocalMemoryOpenCl12Guarantees) {
 }
 
 TEST_F(TrackerTest, BadArgumentsAreClearErrors) {
-  TrackOptions o;
-  o.final_reduction = "gpu";
-  EXPECT_THROW(Tracker(ctx(), o, 320, 240), ConfigError);
   EXPECT_THROW(Tracker(ctx(), TrackOptions{}, 0, 240), InvalidArgument);
   Tracker tracker(ctx(), TrackOptions{}, 320, 240);
   map::VolumeDeviceView empty;
@@ -1123,7 +1136,7 @@ TEST_F(TrackerTest, RealPairRecoversGroundTruthMotion) {
 
 TEST_F(TrackerTest, RealFrameOfAnotherSceneIsLost) {
   const RealPair p = makeRealPair(ctx(), "case_1");
-  io::Intrinsics k;
+  core::Intrinsics k;
   k.fx = k.fy = 585.0;
   k.cx = 320.0;
   k.cy = 240.0;

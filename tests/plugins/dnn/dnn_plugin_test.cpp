@@ -19,8 +19,8 @@ constexpr double kMinMaskIou = 0.99;      // binary mask (probability >= 0.5) vs
 constexpr float kScoreTolerance = 1e-6f;  // scores pass through unchanged
 constexpr float kMaskThreshold = 0.5f;    // the plugin's default mask_threshold
 
-emf::io::Intrinsics intrinsics(cv::Size depth) {
-  emf::io::Intrinsics k;
+emf::core::Intrinsics intrinsics(cv::Size depth) {
+  emf::core::Intrinsics k;
   k.fx = k.fy = 525.0 * depth.width / 640.0;
   k.cx = depth.width / 2.0 - 0.5;
   k.cy = depth.height / 2.0 - 0.5;
@@ -33,8 +33,8 @@ std::unique_ptr<DetectorPlugin> loadDnn(const std::string& config, cv::Size dept
   return DetectorPlugin::load("dnn", {EMF_PLUGIN_BUILD_DIR}, config, "", intrinsics(depth));
 }
 
-emf::io::Frame makeFrame(int64_t index, cv::Size color, cv::Size depth) {
-  emf::io::Frame f;
+emf::core::Frame makeFrame(int64_t index, cv::Size color, cv::Size depth) {
+  emf::core::Frame f;
   f.index = index;
   f.timestamp = 0.033 * static_cast<double>(index);
   f.timestamp_text = std::to_string(f.timestamp);
