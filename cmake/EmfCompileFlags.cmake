@@ -9,6 +9,11 @@ function(emf_set_warnings target)
     $<$<COMPILE_LANGUAGE:C>:-Wall -Wextra -Wpedantic -Werror>)
 endfunction()
 
+# Floating point as written, on every CPU: GCC contracts a*b+c into one fused multiply-add
+# wherever the target has one (aarch64 always does, x86-64 only with -mfma), and the CPU
+# references of the kernels must compute the same rounding on arm64 as on x86-64.
+add_compile_options($<$<COMPILE_LANGUAGE:CXX,C>:-ffp-contract=off>)
+
 set(EMF_SANITIZE_FLAGS "")
 if(EMF_SANITIZE)
   if(NOT EMF_SANITIZE MATCHES "^(address,undefined|undefined,address|address|undefined|thread)$")

@@ -13,9 +13,13 @@ PACKAGES=(
   xvfb x11-apps
 )
 
+# Installed for this machine's architecture (or arch-independent): a package of a foreign
+# architecture (multiarch, e.g. arm64 libraries) does not count.
+native="$(dpkg --print-architecture)"
 missing=()
 for p in "${PACKAGES[@]}"; do
-  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+  if ! dpkg-query -W -f='${Status} ${Architecture}\n' "$p" 2>/dev/null |
+    grep -qE "^install ok installed ($native|all)$"; then
     missing+=("$p")
   fi
 done

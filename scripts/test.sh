@@ -4,12 +4,14 @@
 #   2. AddressSanitizer + UndefinedBehaviorSanitizer build: the whole suite except the
 #      long-running integration sequences (label 'slow')
 #   3. ThreadSanitizer build: the frame ring and the runtime threads (label 'threads')
-# Set EMF_TEST_STAGES="release" (or "release asan tsan", the default) to choose.
+#   4. arm64: cross build and the smoke set under qemu-user (scripts/test_arm64.sh --smoke,
+#      docs/platforms.md)
+# Set EMF_TEST_STAGES="release" (or "release asan tsan arm64", the default) to choose.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install_deps.sh
 
-stages="${EMF_TEST_STAGES:-release asan tsan}"
+stages="${EMF_TEST_STAGES:-release asan tsan arm64}"
 jobs="${EMF_JOBS:-$(nproc)}"
 status=0
 for stage in $stages; do
@@ -33,8 +35,11 @@ for stage in $stages; do
       (cd build-tsan && TSAN_OPTIONS=halt_on_error=1 \
          ctest --output-on-failure -j "$jobs" -L threads --no-tests=ignore) || status=1
       ;;
+    arm64)
+      bash scripts/test_arm64.sh --smoke || status=1
+      ;;
     *)
-      echo "unknown stage '$stage' (release, asan, tsan)" >&2
+      echo "unknown stage '$stage' (release, asan, tsan, arm64)" >&2
       exit 2
       ;;
   esac

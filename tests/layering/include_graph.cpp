@@ -31,7 +31,8 @@ std::vector<Module> readModuleGraph(const std::string& path) {
   return modules;
 }
 
-std::vector<Include> scanIncludes(const std::string& source_root, const std::vector<Module>& modules) {
+std::vector<Include> scanIncludes(const std::string& source_root,
+                                  const std::vector<Module>& modules) {
   std::map<std::string, std::string> by_prefix;  // include prefix -> module
   for (const Module& m : modules) by_prefix[fs::path(m.folder).filename().string()] = m.name;
   const std::regex include_re(R"(^\s*#\s*include\s*"([^"/]+)/[^"]*")");
@@ -51,15 +52,16 @@ std::vector<Include> scanIncludes(const std::string& source_root, const std::vec
         if (!std::regex_search(line, match, include_re)) continue;
         const auto target = by_prefix.find(match[1].str());
         if (target == by_prefix.end() || target->second == m.name) continue;
-        found.push_back({m.name, target->second,
-                         fs::relative(entry.path(), source_root).string(), number});
+        found.push_back(
+            {m.name, target->second, fs::relative(entry.path(), source_root).string(), number});
       }
     }
   }
   return found;
 }
 
-std::set<std::string> allowedModules(const std::vector<Module>& modules, const std::string& module) {
+std::set<std::string> allowedModules(const std::vector<Module>& modules,
+                                     const std::string& module) {
   std::map<std::string, const Module*> by_name;
   for (const Module& m : modules) by_name[m.name] = &m;
   std::set<std::string> allowed;

@@ -29,7 +29,8 @@ struct Include {
 
 /// Every include, in the modules' folders, of a header of another module. A header belongs to
 /// the module whose folder's last component is the first component of the include path.
-std::vector<Include> scanIncludes(const std::string& source_root, const std::vector<Module>& modules);
+std::vector<Include> scanIncludes(const std::string& source_root,
+                                  const std::vector<Module>& modules);
 
 /// The modules `module` may include: its DEPENDS and theirs, transitively.
 std::set<std::string> allowedModules(const std::vector<Module>& modules, const std::string& module);
