@@ -36,7 +36,7 @@ struct ObjectPose {
 /// batch: render the object masks for matching at `T_world_camera` / `objects`, not at the
 /// current poses.
 struct DetectionBatch {
-  int64_t frame_index = 0;     // io::Frame::index of the frame the detector ran on
+  int64_t frame_index = 0;     // core::Frame::index of the frame the detector ran on
   double timestamp = 0;        // its timestamp (seconds)
   std::string timestamp_text;  // its timestamp as the source wrote it
   Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();  // camera pose of that frame
@@ -115,7 +115,7 @@ class DetectorScheduler {
   /// Async: returns the finished result not yet returned, if any, then hands a due frame (same
   /// rule) to the detector thread if it is idle, else counts it as dropped. The slot holds one
   /// frame, so every result is returned before the next hand-over. Disabled: nullopt.
-  /// Detections a source attaches to frames (io::Frame::detections) are never used here: the
+  /// Detections a source attaches to frames (core::Frame::detections) are never used here: the
   /// maskfile plugin replays them.
   std::optional<DetectionBatch> submit(const core::Frame& frame,
                                        const Eigen::Isometry3d& T_world_camera,

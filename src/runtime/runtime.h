@@ -101,7 +101,7 @@ struct RuntimeCounters {
 /// The result of one processed frame.
 struct RuntimeResult {
   int64_t frame_index = 0;   // 0-based count of results of this runtime
-  int64_t source_index = 0;  // the source's frame index (io::Frame::index)
+  int64_t source_index = 0;  // the source's frame index (core::Frame::index)
   int64_t sequence = 0;      // ring sequence number (a gap to the previous = dropped frames)
   double timestamp = 0;      // the frame's sensor timestamp, seconds (sensor clock)
   Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();  // camera in the world
