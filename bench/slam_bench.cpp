@@ -5,7 +5,7 @@
 // are first written once as a TUM folder (depth uint16, 5000 units/m, plus ground truth); then
 // `emf run --source tum:<folder>` and `python3 bench/open3d_peer.py --data <folder>` run on it
 // as child processes, one after the other. Per system: ATE RMSE against the ground truth
-// (io::computeAte, as `emf eval`), ms per frame median/p90 (emf: SlamSystem's stage timer from
+// (eval::computeAte, as `emf eval`), ms per frame median/p90 (emf: SlamSystem's stage timer from
 // run.json; peer: its own per-frame clock; both exclude image loading), peak RSS (the child's
 // ru_maxrss from wait4) and, for emf, the voxel-pool memory. Ends with one line per dataset:
 //   slam_bench data=<name> res=WxH voxel_m=.. emf_ate_cm=.. emf_ms=.. emf_p90_ms=.. emf_lost=..
@@ -14,7 +14,7 @@
 // (speedup = peer median / emf median; peer fields are "nan" with --no-peer). The last four tell
 // how far the ground truth itself is off: the ATE of emf against the peer, and each
 // trajectory's own rms rotation error per frame from the three-cornered hat of their pairwise
-// one-frame RPEs (io::threeCorneredHat).
+// one-frame RPEs (eval::threeCorneredHat).
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -306,7 +306,7 @@ struct SystemFigures {
   int lost = 0;
 };
 
-/// The estimates against each other (only with the peer): see io::threeCorneredHat.
+/// The estimates against each other (only with the peer): see eval::threeCorneredHat.
 struct TruthCheck {
   double emf_vs_peer_ate_cm = NAN;
   double step_deg[3] = {NAN, NAN, NAN};  // own rotation error per frame: gt, emf, peer
@@ -321,7 +321,7 @@ std::string fmt(double v, int decimals = 2) {
 
 /// How much of the disagreement with the ground truth is the ground truth's own: the two
 /// estimates against each other, and the three-cornered hat of the three trajectories' steps
-/// (io::threeCorneredHat) over one frame and over one second. Prints the `truth:` lines. The
+/// (eval::threeCorneredHat) over one frame and over one second. Prints the `truth:` lines. The
 /// hat assumes independent errors: an error two trajectories share (the peer's ICP and a ground
 /// truth from ICP tracking, say) is given to the third.
 TruthCheck truthCheck(const emf::io::Trajectory& gt, const emf::io::Trajectory& est,
