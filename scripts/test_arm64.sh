@@ -32,6 +32,7 @@ for p in "${host[@]}"; do
 done
 if ((${#missing[@]})); then
   echo "emf arm64: installing ${missing[*]}"
+  $sudo apt-get update -q
   $sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends \
     "${missing[@]}"
 fi
