@@ -49,7 +49,8 @@ using emf::map::kBlockSize;
 using emf::map::kBlockVoxels;
 using Clock = std::chrono::steady_clock;
 
-// ---- The sequence, read through sources::openSource("tum:...") -----------------------------------
+// ---- The sequence, read through sources::openSource("tum:...")
+// -----------------------------------
 struct BenchFrame {
   double timestamp = 0;
   cv::Mat depth_m;  // CV_32F metres, NaN invalid, full resolution
