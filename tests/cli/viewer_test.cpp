@@ -181,9 +181,10 @@ TEST(Viewer, TheWindowShowsThePicturesUnderXvfb) {
   ASSERT_EQ(test::runCommand("command -v Xvfb && command -v xwd", nullptr), 0)
       << "Xvfb and xwd are installed by scripts/install_deps.sh (xvfb, x11-apps)";
   const std::string dir = test::tempDir("viewer-xvfb");
-  // A display number of our own: Xvfb picks a free one and writes it to the pipe. Under load an
-  // Xvfb start can fail fatally after it wrote the number ("Cannot write display number"): a
-  // server that is gone once its socket should be up is started again.
+  // A display number of our own: Xvfb picks a free one and writes it to the pipe, the digits and
+  // the newline in two writes. The pipe stays open until the newline: closed after the digits,
+  // the second write fails and Xvfb exits ("Cannot write display number"). A server that is
+  // gone once its socket should be up is started again.
   constexpr int kXvfbStarts = 3;
   pid_t xvfb = -1;
   std::string digits;
@@ -199,12 +200,15 @@ TEST(Viewer, TheWindowShowsThePicturesUnderXvfb) {
       _exit(127);
     }
     close(fds[1]);
-    char number[16] = {0};
-    const ssize_t got = read(fds[0], number, sizeof(number) - 1);
+    std::string number;
+    char c = 0;
+    while (number.size() < 16 && read(fds[0], &c, 1) == 1 && c != '\n') number += c;
     close(fds[0]);
     digits.clear();
-    for (const char* c = number; got > 0 && *c && std::isdigit(static_cast<unsigned char>(*c)); ++c)
-      digits += *c;
+    for (const char d : number) {
+      if (!std::isdigit(static_cast<unsigned char>(d))) break;
+      digits += d;
+    }
     // Its socket must accept connections before emf starts (emf checks, then refuses).
     for (int i = 0; !digits.empty() && i < 500 && !fs::exists("/tmp/.X11-unix/X" + digits); ++i) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
