@@ -152,10 +152,13 @@ std::vector<core::Detection> simulateDetections(const cv::Mat& instance_ids,
   if (false_positive && !o.false_positive_classes.empty()) {
     cv::Mat mask = cv::Mat::zeros(instance_ids.size(), CV_8U);
     const double w = instance_ids.cols, h = instance_ids.rows;
-    const cv::Point centre(static_cast<int>(fp_rng.uniform(0.1, 0.9) * w),
-                           static_cast<int>(fp_rng.uniform(0.1, 0.9) * h));
-    const cv::Size axes(std::max(2, static_cast<int>(fp_rng.uniform(0.03, 0.1) * w)),
-                        std::max(2, static_cast<int>(fp_rng.uniform(0.03, 0.1) * w)));
+    // One draw per statement (rng.h), y before x: the order these detections were made with.
+    const int centre_y = static_cast<int>(fp_rng.uniform(0.1, 0.9) * h);
+    const int centre_x = static_cast<int>(fp_rng.uniform(0.1, 0.9) * w);
+    const int axis_y = std::max(2, static_cast<int>(fp_rng.uniform(0.03, 0.1) * w));
+    const int axis_x = std::max(2, static_cast<int>(fp_rng.uniform(0.03, 0.1) * w));
+    const cv::Point centre(centre_x, centre_y);
+    const cv::Size axes(axis_x, axis_y);
     cv::ellipse(mask, centre, axes, fp_rng.uniform(0.0, 180.0), 0.0, 360.0, cv::Scalar(255),
                 cv::FILLED);
     const int c = fp_rng.uniformInt(0, static_cast<int>(o.false_positive_classes.size()) - 1);

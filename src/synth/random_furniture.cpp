@@ -2,14 +2,18 @@
 #include "synth/random_furniture.h"
 
 #include <algorithm>
+#include <array>
 
 #include "synth/shapes.h"
 
 namespace emf::synth::random_gen {
 
 void addPillars(Scene& s, Rng& rng, Layout* L, const Occupant& stage) {
-  const Material plaster = pattern(Texture::kNoise, randomColour(rng, 0.55, 0.85),
-                                   randomColour(rng, 0.45, 0.7), rng.uniform(0.2, 0.5));
+  // One draw per statement (rng.h): this order is the one every seed's scene was made with.
+  const double grain_m = rng.uniform(0.2, 0.5);
+  const std::array<float, 3> second = randomColour(rng, 0.45, 0.7);
+  const std::array<float, 3> first = randomColour(rng, 0.55, 0.85);
+  const Material plaster = pattern(Texture::kNoise, first, second, grain_m);
   const double h = 0.5 * L->ceiling + 0.1;
   std::vector<Primitive> pillars;
   auto add = [&](double x, double y, double hx, double hy) {
@@ -26,8 +30,9 @@ void addPillars(Scene& s, Rng& rng, Layout* L, const Occupant& stage) {
   for (int k = 0; k < (orbit ? 1 : 2); ++k) {
     const double depth = rng.uniform(0.15, 0.3);
     const double x = (k == 0 ? -1 : 1) * rng.uniform(0.3, std::max(0.35, L->room_hx - 0.6));
-    add(orbit ? rng.uniform(-L->room_hx + 0.5, L->room_hx - 0.5) : x, L->room_y_hi - depth,
-        rng.uniform(0.15, 0.35), depth);
+    const double hx = rng.uniform(0.15, 0.35);
+    add(orbit ? rng.uniform(-L->room_hx + 0.5, L->room_hx - 0.5) : x, L->room_y_hi - depth, hx,
+        depth);
   }
   for (int side : {-1, 1}) {
     const double depth = rng.uniform(0.15, 0.3);
@@ -38,8 +43,9 @@ void addPillars(Scene& s, Rng& rng, Layout* L, const Occupant& stage) {
   }
   if (orbit) {
     const double depth = rng.uniform(0.15, 0.3);
-    add(rng.uniform(-L->room_hx + 0.5, L->room_hx - 0.5), L->room_y_lo + depth,
-        rng.uniform(0.15, 0.35), depth);
+    const double hx = rng.uniform(0.15, 0.35);
+    const double x = rng.uniform(-L->room_hx + 0.5, L->room_hx - 0.5);
+    add(x, L->room_y_lo + depth, hx, depth);
   }
 }
 
@@ -68,8 +74,11 @@ void addFurniture(Scene& s, Rng& rng, Layout* L, const Occupant& stage) {
         yaw = wall == 1 ? -kPi / 2 : kPi / 2;
       }
       switch (kind) {
-        case 0:
-          addTable(piece, x, y, yaw, rng.uniform(0.4, 0.7), rng.uniform(0.3, 0.45));
+        case 0: {
+          const double half_y = rng.uniform(0.3, 0.45);
+          const double half_x = rng.uniform(0.4, 0.7);
+          addTable(piece, x, y, yaw, half_x, half_y);
+        }
           if (rng.bernoulli(0.6)) addTableItems(piece, x, y);
           break;
         case 1:
@@ -87,8 +96,9 @@ void addFurniture(Scene& s, Rng& rng, Layout* L, const Occupant& stage) {
         default: {
           // A cabinet.
           const double half_z = rng.uniform(0.3, 0.6);
+          const Material material = randomMaterial(rng);
           piece.statics.push_back(makeBox({rng.uniform(0.25, 0.5), rng.uniform(0.2, 0.35), half_z},
-                                          at(x, y, half_z, yaw), randomMaterial(rng)));
+                                          at(x, y, half_z, yaw), material));
           break;
         }
       }

@@ -148,7 +148,9 @@ bool planMotion(Family family, Kind kind, double s, double rest_z, Rng& rng, con
       }
       m->plan = MotionPlan(poseAt(p, rest_z, yaw0));
       m->plan.rest(rest0);
-      m->plan.drive(T - rest0, curve, rng.uniform(), rng.uniform(0.15, 0.32), 50 * kDeg, stops);
+      const double speed_mps = rng.uniform(0.15, 0.32);  // one draw per statement (rng.h)
+      const double phase0 = rng.uniform();
+      m->plan.drive(T - rest0, curve, phase0, speed_mps, 50 * kDeg, stops);
       m->motion = "drive";
       return true;
     }
@@ -156,7 +158,8 @@ bool planMotion(Family family, Kind kind, double s, double rest_z, Rng& rng, con
       m->plan = MotionPlan(poseAt(p, rest_z, yaw0));
       while (m->plan.end() < T - 2.0) {
         m->plan.rest(rng.uniform(0.5, 3.0));
-        const double angle = (rng.bernoulli(0.5) ? 1 : -1) * rng.uniform(60, 270) * kDeg;
+        const double sign = rng.bernoulli(0.5) ? 1 : -1;
+        const double angle = sign * rng.uniform(60, 270) * kDeg;
         const double rate = rng.uniform(18, 30) * kDeg;
         const Eigen::Vector3d pivot = m->plan.endPose() * centre;
         m->plan.rotateAbout(std::fabs(angle) / rate, pivot, Eigen::Vector3d::UnitZ(), angle);
@@ -269,7 +272,10 @@ bool planMotion(Family family, Kind kind, double s, double rest_z, Rng& rng, con
         } else {
           eased(1.6, 3.0, step, Eigen::Vector3d(0, 0, rng.uniform(-60, 60) * kDeg));
           if (rng.bernoulli(0.4)) {
-            const Eigen::Vector3d w = Eigen::Vector3d(rng.normal(), rng.normal(), rng.normal());
+            const double w_z = rng.normal();
+            const double w_y = rng.normal();
+            const double w_x = rng.normal();
+            const Eigen::Vector3d w(w_x, w_y, w_z);
             eased(1.2, 2.0, Eigen::Vector3d::Zero(), w.normalized() * rng.uniform(20, 50) * kDeg);
           }
         }
@@ -335,20 +341,31 @@ bool planMotion(Family family, Kind kind, double s, double rest_z, Rng& rng, con
           if (!inStage(L, curve(u))) return false;
         }
         m->plan.rest(rng.uniform(0.0, 2.0));
-        m->plan.drive(T - m->plan.end(), curve, rng.uniform(), rng.uniform(0.12, 0.25), 35 * kDeg,
-                      {});
+        const double speed_mps = rng.uniform(0.12, 0.25);
+        const double phase0 = rng.uniform();
+        m->plan.drive(T - m->plan.end(), curve, phase0, speed_mps, 35 * kDeg, {});
         m->motion = "float";
         return true;
       }
       while (m->plan.end() < T - 4.0) {
-        const Eigen::Vector3d amp_m(rng.uniform(0.15, 0.45), rng.uniform(0.1, 0.3),
-                                    rng.uniform(0.05, 0.2));
-        const Eigen::Vector3d amp_rad(rng.uniform(0.05, 0.2), rng.uniform(0.05, 0.2),
-                                      rng.uniform(0.1, 0.4));
-        const Eigen::Vector3d f(rng.uniform(0.05, 0.15), rng.uniform(0.06, 0.16),
-                                rng.uniform(0.08, 0.2));
-        const Eigen::Vector3d phase(rng.uniform(0, 2 * kPi), rng.uniform(0, 2 * kPi),
-                                    rng.uniform(0, 2 * kPi));
+        // One draw per statement (rng.h), z before y before x: the order these scenes were made
+        // with.
+        const double amp_m_z = rng.uniform(0.05, 0.2);
+        const double amp_m_y = rng.uniform(0.1, 0.3);
+        const double amp_m_x = rng.uniform(0.15, 0.45);
+        const Eigen::Vector3d amp_m(amp_m_x, amp_m_y, amp_m_z);
+        const double amp_rad_z = rng.uniform(0.1, 0.4);
+        const double amp_rad_y = rng.uniform(0.05, 0.2);
+        const double amp_rad_x = rng.uniform(0.05, 0.2);
+        const Eigen::Vector3d amp_rad(amp_rad_x, amp_rad_y, amp_rad_z);
+        const double f_z = rng.uniform(0.08, 0.2);
+        const double f_y = rng.uniform(0.06, 0.16);
+        const double f_x = rng.uniform(0.05, 0.15);
+        const Eigen::Vector3d f(f_x, f_y, f_z);
+        const double phase_z = rng.uniform(0, 2 * kPi);
+        const double phase_y = rng.uniform(0, 2 * kPi);
+        const double phase_x = rng.uniform(0, 2 * kPi);
+        const Eigen::Vector3d phase(phase_x, phase_y, phase_z);
         m->plan.drift(rng.uniform(6.0, 14.0), amp_m, amp_rad, f, phase, 1.5);
         if (rng.bernoulli(0.3)) m->plan.rest(rng.uniform(0.5, 2.0));
       }

@@ -1,6 +1,7 @@
 #include "synth/random_scene.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "common/error.h"
@@ -76,11 +77,16 @@ Attempt generate(uint64_t seed, int attempt, const RandomSceneOptions& options, 
   const double hz = rng.uniform(1.35, 1.6);
   L.ceiling = 2 * hz - 0.2;
   const double cy = 0.5 * (L.room_y_lo + L.room_y_hi), hy = 0.5 * (L.room_y_hi - L.room_y_lo);
-  addRoom(scene, {L.room_hx, hy, hz}, cy,
-          pattern(rng.bernoulli(0.5) ? Texture::kTiles : Texture::kChecker,
-                  randomColour(rng, 0.2, 0.6), randomColour(rng, 0.3, 0.8), rng.uniform(0.25, 0.6)),
-          pattern(Texture::kNoise, randomColour(rng, 0.55, 0.9), randomColour(rng, 0.45, 0.75),
-                  rng.uniform(0.2, 0.5)));
+  // One draw per statement (rng.h), in the order every seed's room was made with.
+  const double wall_grain_m = rng.uniform(0.2, 0.5);
+  const std::array<float, 3> wall_b = randomColour(rng, 0.45, 0.75);
+  const std::array<float, 3> wall_a = randomColour(rng, 0.55, 0.9);
+  const double floor_tile_m = rng.uniform(0.25, 0.6);
+  const std::array<float, 3> floor_b = randomColour(rng, 0.3, 0.8);
+  const std::array<float, 3> floor_a = randomColour(rng, 0.2, 0.6);
+  const Texture floor_texture = rng.bernoulli(0.5) ? Texture::kTiles : Texture::kChecker;
+  addRoom(scene, {L.room_hx, hy, hz}, cy, pattern(floor_texture, floor_a, floor_b, floor_tile_m),
+          pattern(Texture::kNoise, wall_a, wall_b, wall_grain_m));
   scene.camera = makeCamera(rng, &L);
   {
     // The camera's space at every check instant.
@@ -110,9 +116,11 @@ Attempt generate(uint64_t seed, int attempt, const RandomSceneOptions& options, 
   if (rng.bernoulli(0.3)) {
     for (int k = 0; k < 10; ++k) {
       const Eigen::Vector2d p = stagePoint(rng, L, 0.3);
+      const Material material = randomMaterial(rng);  // one draw per statement (rng.h)
+      const double yaw = rng.uniform(-0.5, 0.5);
       std::vector<Primitive> cab = {
           makeBox({rng.uniform(0.2, 0.45), rng.uniform(0.15, 0.3), rng.uniform(0.2, 0.4)},
-                  at(p.x(), p.y(), 0, rng.uniform(-0.5, 0.5)), randomMaterial(rng))};
+                  at(p.x(), p.y(), 0, yaw), material)};
       cab[0].T_parent_primitive.translation().z() = cab[0].geometry.half_extents_m.z;
       const Occupant occ = staticOccupant(cab, 0.1);
       if (!fits(L, occ)) continue;

@@ -2,6 +2,12 @@
 // std::normal_distribution) so a seed gives the same numbers with every standard library, and
 // so every (seed, frame, row, stream) gets its own independent generator: results then do not
 // depend on the number of threads.
+//
+// One draw per statement (or within a braced list, which C++ evaluates left to right): the
+// arguments of one call, overloaded operators included, are evaluated in an unspecified order
+// (GCC: right to left on x86-64, left to right on aarch64), so `f(rng.uniform(), rng.uniform())`
+// would make a different scene of the same seed on each platform. Where a call drew several
+// values, they are written out in the order x86-64 drew them, so that every seed keeps its scene.
 #pragma once
 
 #include <cmath>

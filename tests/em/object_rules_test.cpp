@@ -82,7 +82,8 @@ TEST(ObjectRules, PlacementFromPercentilesWithPadding) {
   std::uniform_real_distribution<double> u(-0.5, 0.5);
   std::vector<Eigen::Vector3d> pts;
   for (int i = 0; i < 20000; ++i) {
-    pts.emplace_back(1 + 0.2 * u(rng), 2 + 0.1 * u(rng), 3 + 0.05 * u(rng));
+    const Eigen::Vector3d r = test::drawXyz<Eigen::Vector3d>([&] { return u(rng); });
+    pts.emplace_back(1 + 0.2 * r.x(), 2 + 0.1 * r.y(), 3 + 0.05 * r.z());
   }
   ObjectOptions o;
   const VolumePlacement p = placeObject(pts, o);

@@ -148,9 +148,9 @@ TEST(Eval, ThreeCorneredHatRecoversEachTrajectorysOwnStepError) {
     for (int i = 0; i < 3; ++i) {
       const double s = sigma_deg[i] * M_PI / 180;
       Eigen::Isometry3d noise = Eigen::Isometry3d::Identity();
-      const Eigen::Vector3d w(s * unit(rng), s * unit(rng), s * unit(rng));
+      const Eigen::Vector3d w = s * test::drawXyz<Eigen::Vector3d>([&] { return unit(rng); });
       if (w.norm() > 0) noise.linear() = Eigen::AngleAxisd(w.norm(), w.normalized()).matrix();
-      noise.translation() = sigma_m[i] * Eigen::Vector3d(unit(rng), unit(rng), unit(rng));
+      noise.translation() = sigma_m[i] * test::drawXyz<Eigen::Vector3d>([&] { return unit(rng); });
       traj[i].append(t, truth * noise);
     }
   }
@@ -220,7 +220,7 @@ struct ObjectScene {
     std::normal_distribution<double> noise(0.0, 1.0);
     auto jitter = [&](const Eigen::Isometry3d& T, double sigma) {
       Eigen::Isometry3d J = T;
-      J.translation() += sigma * Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+      J.translation() += sigma * test::drawXyz<Eigen::Vector3d>([&] { return noise(rng); });
       return J;
     };
     Trajectory cam, obj1, obj2, e7, e3, e9, e5;

@@ -282,9 +282,7 @@ TEST(Mesh, StreamedExtractionEqualsTheNonStreamingReference) {
   size_t total_triangles = 0, with_counts = 0;
   for (int trial = 0; trial < 60; ++trial) {
     map::VolumeHostData h;
-    h.dims_blocks =
-        Eigen::Vector3i(1 + static_cast<int>(rng() % 4), 1 + static_cast<int>(rng() % 4),
-                        1 + static_cast<int>(rng() % 4));
+    h.dims_blocks = test::drawXyz<Eigen::Vector3i>([&] { return 1 + static_cast<int>(rng() % 4); });
     h.voxel_size_m = 0.01f;
     h.truncation_m = 0.04f;
     const int n = h.dims_blocks.prod();
@@ -306,7 +304,7 @@ TEST(Mesh, StreamedExtractionEqualsTheNonStreamingReference) {
     float radius[3];
     const Eigen::Vector3f ext = h.dims_blocks.cast<float>() * 0.08f;
     for (int k = 0; k < 3; ++k) {
-      centre[k] = Eigen::Vector3f(u(rng), u(rng), u(rng)).cwiseProduct(ext);
+      centre[k] = test::drawXyz<Eigen::Vector3f>([&] { return u(rng); }).cwiseProduct(ext);
       radius[k] = 0.02f + 0.1f * u(rng);
     }
     const float noise = trial % 2 ? 0.3f : 0.0f;
@@ -332,9 +330,11 @@ TEST(Mesh, StreamedExtractionEqualsTheNonStreamingReference) {
       }
     }
     Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-    T.linear() = Eigen::AngleAxisd(6.0 * u(rng), Eigen::Vector3d(u(rng), u(rng), 1).normalized())
-                     .toRotationMatrix();
-    T.translation() = Eigen::Vector3d(u(rng), u(rng), u(rng));
+    // One draw per statement (test::drawXyz): the axis's y, its x, then the angle.
+    const double axis_y = u(rng);
+    const Eigen::Vector3d axis = Eigen::Vector3d(u(rng), axis_y, 1).normalized();
+    T.linear() = Eigen::AngleAxisd(6.0 * u(rng), axis).toRotationMatrix();
+    T.translation() = test::drawXyz<Eigen::Vector3d>([&] { return u(rng); });
     map::MeshOptions opt;
     opt.world_frame = trial % 4 != 1;
     opt.min_weight = trial % 5 == 2 ? 4.f : 0.f;
@@ -396,7 +396,7 @@ TEST(MeshDistanceTest, MatchesBruteForce) {
   std::uniform_real_distribution<float> u(0.f, 0.3f);
   map::Mesh m;
   for (int i = 0; i < 300; ++i) {
-    const Eigen::Vector3f a(u(rng), u(rng), u(rng));
+    const Eigen::Vector3f a = test::drawXyz<Eigen::Vector3f>([&] { return u(rng); });
     const Eigen::Vector3f d1 = Eigen::Vector3f::Random() * 0.02f,
                           d2 = Eigen::Vector3f::Random() * 0.02f;
     m.vertices.push_back(a);
@@ -407,7 +407,7 @@ TEST(MeshDistanceTest, MatchesBruteForce) {
   m.normals.assign(m.vertices.size(), Eigen::Vector3f::UnitZ());
   const map::MeshDistance md(m, 0.02f);
   for (int i = 0; i < 500; ++i) {
-    const Eigen::Vector3f p(u(rng), u(rng), u(rng));
+    const Eigen::Vector3f p = test::drawXyz<Eigen::Vector3f>([&] { return u(rng); });
     float brute = std::numeric_limits<float>::infinity();
     for (const auto& t : m.triangles) {
       brute = std::min(brute, map::pointTriangleDistance(p, m.vertices[t[0]], m.vertices[t[1]],

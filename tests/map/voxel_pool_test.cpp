@@ -246,7 +246,7 @@ TEST_F(Pool, GrowReindexesWithoutMovingVoxels) {
   std::uniform_real_distribution<float> u(0.05f, 0.59f);
   int compared = 0;
   for (int i = 0; i < 2000; ++i) {
-    const Eigen::Vector3f p0(u(rng), u(rng), u(rng));
+    const Eigen::Vector3f p0 = drawXyz<Eigen::Vector3f>([&] { return u(rng); });
     const Eigen::Vector3d p_w = T_wv * p0.cast<double>();
     const Eigen::Vector3f p1 = (vol.T_world_volume().inverse() * p_w).cast<float>();
     float a, wa, b, wb;

@@ -23,8 +23,11 @@ constexpr double kFiniteDifferenceTolerance = 1e-7;
 Eigen::Isometry3d randomPose(std::mt19937& rng, double max_angle, double max_translation) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   Vector6d xi;
-  xi.head<3>() = test::randomUnit(rng) * max_translation * u(rng);
-  xi.tail<3>() = test::randomUnit(rng) * max_angle * u(rng);
+  // One draw per statement (test::drawXyz): each length before its direction.
+  const double t = u(rng);
+  xi.head<3>() = test::randomUnit(rng) * max_translation * t;
+  const double a = u(rng);
+  xi.tail<3>() = test::randomUnit(rng) * max_angle * a;
   return expSe3(xi);
 }
 

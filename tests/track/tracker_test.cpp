@@ -638,8 +638,9 @@ TEST_F(TrackerTest, DifferentSceneIsLost) {
   std::mt19937 rng(71);
   std::uniform_real_distribution<float> u(-0.5f, 0.5f);
   for (int i = 0; i < 8; ++i) {
-    other.boxes.push_back({Eigen::Vector3f(u(rng), u(rng) * 0.6f, 1.3f + u(rng)),
-                           Eigen::Vector3f(0.12f, 0.12f, 0.12f)});
+    const Eigen::Vector3f r = test::drawXyz<Eigen::Vector3f>([&] { return u(rng); });
+    other.boxes.push_back(
+        {Eigen::Vector3f(r.x(), r.y() * 0.6f, 1.3f + r.z()), Eigen::Vector3f(0.12f, 0.12f, 0.12f)});
   }
   const cv::Mat depth = other.render(room_->intrinsics, Eigen::Isometry3d::Identity());
   ASSERT_GT(cv::countNonZero(depth == depth), 5000);
@@ -908,8 +909,10 @@ TEST(VolumeImageBounds, HoldsEveryProjectedPointOfTheBoxAndIsTight) {
   for (int trial = 0; trial < 20; ++trial) {
     // The box about 1.5-3 m in front of the camera, turned arbitrarily.
     Eigen::Isometry3d T_camera_volume = Eigen::Isometry3d::Identity();
-    T_camera_volume.linear() = expSo3(test::randomUnit(rng) * 3.0 * unit(rng));
-    const Eigen::Vector3d centre(unit(rng) - 0.5, unit(rng) - 0.5, 1.5 + 1.5 * unit(rng));
+    const double turn = unit(rng);  // one draw per statement (test::drawXyz)
+    T_camera_volume.linear() = expSo3(test::randomUnit(rng) * 3.0 * turn);
+    const Eigen::Vector3d c = test::drawXyz<Eigen::Vector3d>([&] { return unit(rng); });
+    const Eigen::Vector3d centre(c.x() - 0.5, c.y() - 0.5, 1.5 + 1.5 * c.z());
     T_camera_volume.translation() = centre - T_camera_volume.linear() * (0.5 * extent);
     const PixelRect r = volumeImageBounds(extent, T_camera_volume.inverse(), k);
     ASSERT_FALSE(r.empty());
@@ -919,8 +922,9 @@ TEST(VolumeImageBounds, HoldsEveryProjectedPointOfTheBoxAndIsTight) {
       const Eigen::Vector3d x =
           i < 8 ? Eigen::Vector3d((i & 1) ? extent.x() : 0.0, (i & 2) ? extent.y() : 0.0,
                                   (i & 4) ? extent.z() : 0.0)
-                : Eigen::Vector3d(unit(rng) * extent.x(), unit(rng) * extent.y(),
-                                  unit(rng) * extent.z());
+                : Eigen::Vector3d(test::drawXyz<Eigen::Vector3d>([&] {
+                                    return unit(rng);
+                                  }).cwiseProduct(extent));
       const Eigen::Vector3d p = T_camera_volume * x;
       const double u = k.fx * p.x() / p.z() + k.cx, v = k.fy * p.y() / p.z() + k.cy;
       u_lo = std::min(u_lo, u);
