@@ -57,6 +57,32 @@ static int pollUntil(emf_runtime* rt, emf_status wanted, int64_t* last) {
   return 0;
 }
 
+/* Polls until the runtime is settled: nothing captured over two polls in a row, every captured
+ * frame processed (or dropped by the ring) and the result queue empty. Returns 1 when it is. */
+static int settle(emf_runtime* rt) {
+  emf_frame_result result;
+  emf_stats stats;
+  int64_t produced = -1;
+  int quiet = 0, i;
+  for (i = 0; i < MAX_POLLS && quiet < 2; ++i) {
+    emf_status s;
+    memset(&result, 0, sizeof(result));
+    result.struct_size = sizeof(result);
+    s = emf_runtime_poll(rt, POLL_MS, &result, NULL, 0, NULL);
+    memset(&stats, 0, sizeof(stats));
+    stats.struct_size = sizeof(stats);
+    if (emf_runtime_get_stats(rt, &stats) != EMF_OK) return 0;
+    if (s != EMF_OK && stats.frames_produced == produced &&
+        stats.frames_processed + stats.frames_dropped == stats.frames_produced) {
+      ++quiet;
+    } else {
+      quiet = 0;
+    }
+    produced = stats.frames_produced;
+  }
+  return quiet >= 2;
+}
+
 struct Poller {
   emf_runtime* rt;
   emf_status status;
@@ -104,7 +130,18 @@ int main(int argc, char** argv) {
   CHECK(stats.sensor_errors >= 1);
 
   writeControl(argv[2], "plugged");
-  CHECK(pollUntil(rt, EMF_OK, &after));
+  /* A result polled now may still come from a frame captured before the unplug (a backlog on a
+   * slow machine, e.g. under emulation): wait for the capture thread's first frame after the
+   * reconnect, so that the sensor is up when it is unplugged again below. */
+  {
+    const int64_t produced_while_down = stats.frames_produced;
+    int resumed = 1, tries = 0;
+    while (resumed && stats.frames_produced <= produced_while_down && tries++ < MAX_POLLS) {
+      resumed = pollUntil(rt, EMF_OK, &after) && emf_runtime_get_stats(rt, &stats) == EMF_OK;
+    }
+    CHECK(resumed);
+    CHECK(stats.frames_produced > produced_while_down);
+  }
   CHECK(after > before); /* frame indices continue after the reconnect */
   printf("results up to source frame %lld before the unplug, %lld after the replug\n",
          (long long)before, (long long)after);
@@ -115,6 +152,10 @@ int main(int argc, char** argv) {
    * runtime under the woken poller: ThreadSanitizer / AddressSanitizer reports). */
   writeControl(argv[2], "unplugged");
   CHECK(pollUntil(rt, EMF_ERROR_DEVICE, &before));
+  /* On a slow machine (e.g. under emulation) a frame timeout just before the unplug takes effect
+   * is reported as a disconnection too, and the sensor comes back once more before it is gone:
+   * the poller below must start when nothing can arrive any more. */
+  CHECK(settle(rt));
   {
     struct Poller p;
     pthread_t thread;
