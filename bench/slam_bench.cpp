@@ -376,6 +376,7 @@ int main(int argc, char** argv) {
     fs::create_directories(a.out);
     int failed = 0;
     std::vector<std::string> lines;
+    bool device_printed = false;  // the device of emf's first run (the peer runs on the CPU)
     std::printf("slam_bench: %dx%d @ %.0f cm, up to %d frames per dataset, peer %s\n", a.res.width,
                 a.res.height, a.res.voxel_m * 100, a.frames, a.peer ? "Open3D" : "off");
     for (const std::string& name : a.data) {
@@ -416,6 +417,11 @@ int main(int argc, char** argv) {
         e.rss_mb = er.peak_rss_mb;
         if (est.size() >= emf::eval::kMinAtePairs) {
           e.ate_cm = emf::eval::computeAte(gt, est).trans_m.rmse * 100;
+        }
+        if (!device_printed && run.at("device").contains("description")) {
+          device_printed = true;
+          std::printf("device: %s\n",
+                      run.at("device").at("description").get<std::string>().c_str());
         }
         const auto& mem = run.at("memory");
         std::printf(

@@ -51,11 +51,28 @@ bool contains(const std::string& haystack, const std::string& needle) {
 
 }  // namespace
 
+std::string DeviceInfo::poclTarget() const {
+  if (!is_pocl || type != "cpu") return "";
+  // "<driver>-<llvm cpu>-<cpu brand>": the brand is the first word with a space after it or
+  // an "(R)"; LLVM CPU names have neither (but may have '-', as skylake-avx512).
+  const size_t driver_end = device_name.find('-');
+  if (driver_end == std::string::npos) return "";
+  const size_t word_end = device_name.find_first_of(" (", driver_end + 1);
+  const size_t brand =
+      device_name.rfind('-', word_end == std::string::npos ? std::string::npos : word_end);
+  if (brand == std::string::npos || brand <= driver_end) return device_name.substr(driver_end + 1);
+  return device_name.substr(driver_end + 1, brand - driver_end - 1);
+}
+
 std::string DeviceInfo::describe() const {
   std::ostringstream os;
   os << device_name << " [" << type << "] on " << platform_name << " (" << device_version
      << ", driver " << driver_version << ", " << compute_units << " compute units, "
-     << (global_mem_bytes >> 20) << " MiB)";
+     << (global_mem_bytes >> 20) << " MiB";
+  const std::string target = poclTarget();
+  if (!target.empty()) os << ", target " << target;
+  os << ", native vector width float " << native_vector_width_float << " int "
+     << native_vector_width_int << ")";
   return os.str();
 }
 
@@ -91,6 +108,8 @@ std::vector<DeviceInfo> listDevices() {
       info.max_alloc_bytes = deviceValue<cl_ulong>(d, CL_DEVICE_MAX_MEM_ALLOC_SIZE);
       info.max_work_group_size = deviceValue<size_t>(d, CL_DEVICE_MAX_WORK_GROUP_SIZE);
       info.host_unified_memory = deviceValue<cl_bool>(d, CL_DEVICE_HOST_UNIFIED_MEMORY) == CL_TRUE;
+      info.native_vector_width_float = deviceValue<cl_uint>(d, CL_DEVICE_NATIVE_VECTOR_WIDTH_FLOAT);
+      info.native_vector_width_int = deviceValue<cl_uint>(d, CL_DEVICE_NATIVE_VECTOR_WIDTH_INT);
       info.is_pocl = contains(info.platform_name, "portable computing language") ||
                      contains(info.platform_name, "pocl");
       out.push_back(info);

@@ -28,8 +28,16 @@ struct DeviceInfo {
   /// CL_DEVICE_HOST_UNIFIED_MEMORY: the device's memory is the host's (CPU devices, most
   /// integrated GPUs). On a CPU device mapping a buffer for reading does not copy it.
   bool host_unified_memory = false;
+  /// CL_DEVICE_NATIVE_VECTOR_WIDTH_FLOAT / _INT: lanes of the device's SIMD units (PoCL CPU:
+  /// 16 floats with AVX-512, 8 with AVX2, 4 with NEON or SSE).
+  uint32_t native_vector_width_float = 0;
+  uint32_t native_vector_width_int = 0;
 
-  /// "PoCL CPU: pthread-skylake... (OpenCL 1.2 ...)".
+  /// PoCL CPU devices: the LLVM CPU their kernels are compiled for, read from the device name
+  /// ("pthread-skylake-avx512-Intel(R) Xeon(R) ..." -> "skylake-avx512"). Empty otherwise.
+  std::string poclTarget() const;
+  /// "<name> [cpu] on <platform> (<version>, driver .., N compute units, M MiB, target ..,
+  /// native vector width float F int I)": what the benches print with their figures.
   std::string describe() const;
 };
 

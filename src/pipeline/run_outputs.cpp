@@ -156,7 +156,10 @@ std::string runSummaryJson(const SlamSystem& slam, const cl::Context& ctx, const
   j["device"] = {{"name", ctx.device().device_name},
                  {"platform", ctx.device().platform_name},
                  {"driver", ctx.device().driver_version},
-                 {"fallback", ctx.selection().fallback}};
+                 {"fallback", ctx.selection().fallback},
+                 {"description", ctx.device().describe()},
+                 {"pocl_target", ctx.device().poclTarget()},
+                 {"native_vector_width_float", ctx.device().native_vector_width_float}};
   const core::Intrinsics& k = slam.intrinsics();
   j["intrinsics"] = {{"fx", k.fx}, {"fy", k.fy},       {"cx", k.cx},
                      {"cy", k.cy}, {"width", k.width}, {"height", k.height}};

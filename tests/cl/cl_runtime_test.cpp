@@ -6,6 +6,7 @@
 #include <fstream>
 #include <limits>
 #include <random>
+#include <utility>
 
 #include "cl/device.h"
 #include "cl/embedded_kernels.h"
@@ -27,6 +28,40 @@ TEST_F(ClRuntime, DefaultSelectionIsPoclCpuInCi) {
     EXPECT_EQ(ctx().device().type, "cpu");
   }
   EXPECT_FALSE(ctx().device().device_name.empty());
+}
+
+TEST(ClDeviceInfo, PoclTargetIsTheLlvmCpuOfTheDeviceName) {
+  DeviceInfo d;
+  d.is_pocl = true;
+  d.type = "cpu";
+  const std::pair<const char*, const char*> cases[] = {
+      {"pthread-skylake-avx512-Intel(R) Xeon(R) Processor", "skylake-avx512"},
+      {"cpu-haswell-AMD EPYC 7B13 64-Core Processor", "haswell"},
+      {"cpu-cortex-a76-ARM Cortex-A76", "cortex-a76"},
+      {"cpu-generic-0x41", "generic"},
+  };
+  for (const auto& [name, target] : cases) {
+    d.device_name = name;
+    EXPECT_EQ(d.poclTarget(), target) << name;
+  }
+  d.device_name = "NVIDIA GeForce RTX 3060";
+  d.type = "gpu";
+  d.is_pocl = false;
+  EXPECT_EQ(d.poclTarget(), "");
+}
+
+TEST_F(ClRuntime, DescriptionNamesTheTargetAndTheVectorWidths) {
+  const DeviceInfo& d = ctx().device();
+  EXPECT_GT(d.native_vector_width_float, 0u);
+  EXPECT_GT(d.native_vector_width_int, 0u);
+  EXPECT_NE(
+      d.describe().find("native vector width float " + std::to_string(d.native_vector_width_float)),
+      std::string::npos)
+      << d.describe();
+  if (d.is_pocl && d.type == "cpu") {
+    EXPECT_FALSE(d.poclTarget().empty()) << d.device_name;
+    EXPECT_NE(d.describe().find("target " + d.poclTarget()), std::string::npos) << d.describe();
+  }
 }
 
 TEST(ClSelection, UnmatchedPreferenceFallsBackToPoclCpu) {
