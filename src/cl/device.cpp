@@ -53,13 +53,20 @@ bool contains(const std::string& haystack, const std::string& needle) {
 
 std::string DeviceInfo::poclTarget() const {
   if (!is_pocl || type != "cpu") return "";
-  // "<driver>-<llvm cpu>-<cpu brand>": the brand is the first word with a space after it or
-  // an "(R)"; LLVM CPU names have neither (but may have '-', as skylake-avx512).
+  // PoCL's version string names the target: "OpenCL 3.0 PoCL HSTR: <driver>-<triple>-<cpu>".
+  const std::string hstr = "HSTR: ";
+  const size_t at = device_version.find(hstr);
+  if (at != std::string::npos) {
+    const size_t from = device_version.find('-', at) + 1;  // after "pthread-" / "cpu-"
+    const size_t end = device_version.find(' ', from);
+    return device_version.substr(from, end == std::string::npos ? end : end - from);
+  }
+  // Otherwise the device name, "<driver>-<llvm cpu>-<cpu brand>": the brand is the first word
+  // followed by a space or "(R)"; LLVM CPU names have neither (but may have '-').
   const size_t driver_end = device_name.find('-');
   if (driver_end == std::string::npos) return "";
   const size_t word_end = device_name.find_first_of(" (", driver_end + 1);
-  const size_t brand =
-      device_name.rfind('-', word_end == std::string::npos ? std::string::npos : word_end);
+  const size_t brand = device_name.rfind('-', word_end);
   if (brand == std::string::npos || brand <= driver_end) return device_name.substr(driver_end + 1);
   return device_name.substr(driver_end + 1, brand - driver_end - 1);
 }

@@ -33,8 +33,10 @@ struct DeviceInfo {
   uint32_t native_vector_width_float = 0;
   uint32_t native_vector_width_int = 0;
 
-  /// PoCL CPU devices: the LLVM CPU their kernels are compiled for, read from the device name
-  /// ("pthread-skylake-avx512-Intel(R) Xeon(R) ..." -> "skylake-avx512"). Empty otherwise.
+  /// PoCL CPU devices: the target their kernels are compiled for, from PoCL's version string
+  /// ("... HSTR: pthread-x86_64-pc-linux-gnu-skylake-avx512" -> "x86_64-pc-linux-gnu-skylake-
+  /// avx512"), else from the device name ("pthread-haswell-AMD EPYC ..." -> "haswell").
+  /// Empty for other devices.
   std::string poclTarget() const;
   /// "<name> [cpu] on <platform> (<version>, driver .., N compute units, M MiB, target ..,
   /// native vector width float F int I)": what the benches print with their figures.

@@ -30,7 +30,7 @@ TEST_F(ClRuntime, DefaultSelectionIsPoclCpuInCi) {
   EXPECT_FALSE(ctx().device().device_name.empty());
 }
 
-TEST(ClDeviceInfo, PoclTargetIsTheLlvmCpuOfTheDeviceName) {
+TEST(ClDeviceInfo, PoclTargetComesFromTheVersionOrTheDeviceName) {
   DeviceInfo d;
   d.is_pocl = true;
   d.type = "cpu";
@@ -44,6 +44,13 @@ TEST(ClDeviceInfo, PoclTargetIsTheLlvmCpuOfTheDeviceName) {
     d.device_name = name;
     EXPECT_EQ(d.poclTarget(), target) << name;
   }
+  // PoCL's version string names it when it has a host string (HSTR), also where PoCL did not
+  // recognise the CPU (aarch64 under qemu: device name "pthread").
+  d.device_name = "pthread";
+  d.device_version = "OpenCL 3.0 PoCL HSTR: pthread-aarch64-unknown-linux-gnu-(null)";
+  EXPECT_EQ(d.poclTarget(), "aarch64-unknown-linux-gnu-(null)");
+  d.device_version = "OpenCL 3.0 PoCL HSTR: pthread-x86_64-pc-linux-gnu-skylake-avx512 extra";
+  EXPECT_EQ(d.poclTarget(), "x86_64-pc-linux-gnu-skylake-avx512");
   d.device_name = "NVIDIA GeForce RTX 3060";
   d.type = "gpu";
   d.is_pocl = false;
