@@ -202,6 +202,22 @@ class ObjectLifecycle {
   cv::Mat downloadVertexMap() const;
 
  private:
+  // The steps of matchDetections (object_matching.cpp).
+  // Detections with a mask of the frame's size and a class, score and box the objects take.
+  std::vector<const core::Detection*> usableDetections(
+      const std::vector<core::Detection>& detections) const;
+  // last_ids_: the objects' ids ray-cast at the detection's frame (the background occludes,
+  // except where the frame's depth sees through it); downloads `vertex` when it needs it.
+  void renderObjectIds(const DetectionBatch& batch, cv::Mat* vertex);
+  // Each usable detection's object by mask IoU (-1: none); one report per detection.
+  std::vector<int> matchByMasks(const std::vector<const core::Detection*>& usable,
+                                std::vector<DetectionMatch>* matches) const;
+  // A matched object takes its detection: existence count, confirmation, foreground mask,
+  // claim region and volume growth.
+  void takeDetection(TrackedObject& o, const core::Detection& d, cv::Mat* vertex);
+  // Objects no detection matched: non-existence counts; tentative ones missed twice dropped.
+  void countMisses(const std::vector<bool>& matched);
+
   bool createObject(const core::Detection& d, const cv::Mat& vertex);
   void deleteByExistence();
   void checkVisibility(const cv::Mat& depth);
