@@ -133,6 +133,14 @@ struct ObjectOptions {
   /// E = this x |rotation off the prediction, rad|^2 / 2 in data-term units (a pixel with full
   /// weight adds r^2 / 2, r in m), for 640x480, scaled with the image area. 0 = off (the paper).
   double motion_prior_rotation = 1.0;
+  /// Still objects (em::looksStill; docs/method.md#object-tracking): held where they stand
+  /// once their tracked poses over still_frames frames stay within still_translation_m (m, of
+  /// the centre) and still_rotation_deg of the newest; released when a tracked pose leaves
+  /// those bounds. still_translation_m 0 = off (the paper, the default: movers that start
+  /// slowly lag, docs/deviations.md); 0.02 suits scenes of still objects.
+  double still_translation_m = 0.0;
+  double still_rotation_deg = 2.0;
+  int still_frames = 15;
 
   void bind(OptionBinder& b) {
     // Pixel thresholds refer to 640x480 images; the SLAM scales them with the image width.
@@ -235,6 +243,14 @@ struct ObjectOptions {
     b.real("motion_prior_rotation", motion_prior_rotation, 0.0, 1e6, "",
            "pull of an object's tracked rotation towards its prediction, in data-term units at "
            "640x480, scaled with the image area (0 = off, the paper)");
+    b.real("still_translation_m", still_translation_m, 0.0, 1.0, "m",
+           "an object whose tracked poses over still_frames frames keep its centre within this "
+           "and its orientation within still_rotation_deg is held still until one does not (0 "
+           "= off, the paper)");
+    b.real("still_rotation_deg", still_rotation_deg, 0.0, 180.0, "deg",
+           "rotation bound of a still object (with still_translation_m)");
+    b.integer("still_frames", still_frames, 2, 1000, "frames",
+              "frames an object's tracked poses must stay within the still bounds to hold it");
   }
 };
 

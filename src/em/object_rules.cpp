@@ -392,6 +392,33 @@ bool lostTooLong(int consecutive_lost_frames, const ObjectOptions& options) {
   return options.max_lost_frames > 0 && consecutive_lost_frames > options.max_lost_frames;
 }
 
+PoseChange poseChange(const Eigen::Isometry3d& T_world_a, const Eigen::Isometry3d& T_world_b,
+                      const Eigen::Vector3d& centre) {
+  const Eigen::Isometry3d T_b_a = T_world_b.inverse() * T_world_a;  // volume frame a -> b
+  PoseChange c;
+  c.centre_m = (T_b_a * centre - centre).norm();
+  c.angle_deg = Eigen::AngleAxisd(T_b_a.linear()).angle() * 180.0 / M_PI;
+  return c;
+}
+
+bool isStillAt(const Eigen::Isometry3d& T_world_held, const Eigen::Isometry3d& T_world_tracked,
+               const Eigen::Vector3d& centre, const ObjectOptions& options) {
+  const PoseChange c = poseChange(T_world_held, T_world_tracked, centre);
+  return c.centre_m <= options.still_translation_m && c.angle_deg <= options.still_rotation_deg;
+}
+
+bool looksStill(const std::vector<Eigen::Isometry3d>& window, const Eigen::Vector3d& centre,
+                const ObjectOptions& options) {
+  if (options.still_translation_m <= 0.0 || options.still_frames < 2 ||
+      static_cast<int>(window.size()) < options.still_frames) {
+    return false;
+  }
+  for (const auto& T : window) {
+    if (!isStillAt(window.back(), T, centre, options)) return false;
+  }
+  return true;
+}
+
 GrowPlan planGrowth(const std::vector<Eigen::Vector3d>& points_volume,
                     const Eigen::Vector3i& dims_blocks, double voxel_size_m, int block_voxels,
                     int max_blocks_per_side) {

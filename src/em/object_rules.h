@@ -173,6 +173,26 @@ bool hiddenTooLong(int consecutive_hidden_frames, const ObjectOptions& options);
 /// deleted (not in the paper: a stale pose re-acquires the object at a wrong place).
 bool lostTooLong(int consecutive_lost_frames, const ObjectOptions& options);
 
+/// How far an object moved between the volume poses T_world_a and T_world_b: its centre
+/// (`centre`: volume frame, m) by centre_m, its orientation by angle_deg.
+struct PoseChange {
+  double centre_m = 0.0;
+  double angle_deg = 0.0;
+};
+PoseChange poseChange(const Eigen::Isometry3d& T_world_a, const Eigen::Isometry3d& T_world_b,
+                      const Eigen::Vector3d& centre);
+
+/// Still objects (objects.still_translation_m, still_rotation_deg; not in the paper): an
+/// object whose tracked poses over the last objects.still_frames frames (`window`: world poses,
+/// oldest first) all lie within those bounds of the newest is still: held at that pose, so
+/// neither the depth noise's jitter nor the slow drift of a model tracked against itself moves
+/// it. It moves again once a tracked pose leaves the held one by more (isStillAt).
+bool looksStill(const std::vector<Eigen::Isometry3d>& window, const Eigen::Vector3d& centre,
+                const ObjectOptions& options);
+/// Whether the tracked pose T_world_tracked lies within the still bounds of T_world_held.
+bool isStillAt(const Eigen::Isometry3d& T_world_held, const Eigen::Isometry3d& T_world_tracked,
+               const Eigen::Vector3d& centre, const ObjectOptions& options);
+
 /// Step 5, growing: whole blocks (block_voxels per block) to add on the low and high side of
 /// each axis so that every point (volume frame, metres; volume spans [0, dims*block*voxel]) lies
 /// inside. Growth per side is capped at `max_blocks_per_side`.

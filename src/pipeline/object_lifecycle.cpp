@@ -184,15 +184,44 @@ void ObjectLifecycle::track(const std::vector<Eigen::Isometry3d>& T_oc_predicted
       o.state = ObjectState::kLost;
       ++o.lost_frames;
       o.last_motion = last_motion_;
+      o.recent_poses.clear();
       logDebug("frame ", frames_, ": object ", o.id, " not tracked: ", r.loss_reason);
       continue;
     }
     o.state = ObjectState::kTracked;
     o.lost_frames = 0;
     o.last_frame = frames_;
+    if (holdStill(o, T_world_camera_ * r.T_volume_camera.inverse())) continue;
     o.last_motion = T_oc_before.inverse() * r.T_volume_camera;
     o.volume->setPose(T_world_camera_ * r.T_volume_camera.inverse());
   }
+}
+
+bool ObjectLifecycle::holdStill(TrackedObject& o, const Eigen::Isometry3d& T_world_tracked) {
+  const em::ObjectOptions& opt = config_.objects;
+  if (opt.still_translation_m <= 0.0) return false;
+  // The centre of the region the detections showed (objects.claim_region), else the volume's.
+  Eigen::Vector3d centre = o.volume->spec().extentM().cast<double>() / 2.0;
+  if (!o.claim_initial.isEmpty()) centre = o.volume->T_volume_initial() * o.claim_initial.center();
+  if (o.still) {
+    if (em::isStillAt(o.volume->T_world_volume(), T_world_tracked, centre, opt)) {
+      o.last_motion = last_motion_;  // still in the world
+      return true;
+    }
+    o.still = false;
+    o.recent_poses.clear();
+    logDebug("frame ", frames_, ": object ", o.id, " moves again");
+  }
+  o.recent_poses.push_back(T_world_tracked);
+  if (static_cast<int>(o.recent_poses.size()) > opt.still_frames) {
+    o.recent_poses.erase(o.recent_poses.begin());
+  }
+  if (em::looksStill(o.recent_poses, centre, opt)) {
+    o.still = true;
+    o.recent_poses.clear();
+    logDebug("frame ", frames_, ": object ", o.id, " still: held");
+  }
+  return false;
 }
 
 const cl::MemHandle* ObjectLifecycle::backgroundWeights() {

@@ -94,6 +94,10 @@ struct TrackedObject {
   /// Camera motion relative to the object over the last tracked frame, T_prev_curr (frame
   /// independent: unchanged when the volume grows). Predicts the next pose.
   Eigen::Isometry3d last_motion = Eigen::Isometry3d::Identity();
+  /// Its tracked world poses of the last objects.still_frames frames (oldest first), and
+  /// whether it is held still (em::looksStill).
+  std::vector<Eigen::Isometry3d> recent_poses;
+  bool still = false;
   em::Existence existence;
   int64_t first_frame = 0, last_frame = 0;
   ObjectState state = ObjectState::kTracked;
@@ -218,6 +222,9 @@ class ObjectLifecycle {
   // Objects no detection matched: non-existence counts; tentative ones missed twice dropped.
   void countMisses(const std::vector<bool>& matched);
 
+  // Still objects (em::looksStill): true when `o` is held at its pose this frame instead of
+  // taking its tracked pose; keeps its recent poses.
+  bool holdStill(TrackedObject& o, const Eigen::Isometry3d& T_world_tracked);
   bool createObject(const core::Detection& d, const cv::Mat& vertex);
   void deleteByExistence();
   void checkVisibility(const cv::Mat& depth);

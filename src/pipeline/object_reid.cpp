@@ -208,6 +208,8 @@ bool ObjectLifecycle::reattach(const core::Detection& d,
   o.hidden = o.leaving = false;
   o.hidden_frames = 0;
   o.last_motion = last_motion_;  // assumed still in the world from here
+  o.recent_poses.clear();
+  o.still = false;
   o.existence.ex += 1.0;
   confirmIfDue(o);
   o.dormant_since = -1;

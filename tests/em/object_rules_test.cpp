@@ -362,6 +362,60 @@ TEST(ObjectRules, LostTooLongAfterMaxLostFrames) {
   EXPECT_FALSE(lostTooLong(100000, o));
 }
 
+TEST(ObjectRules, PoseChangeMeasuresTheCentreAndTheAngle) {
+  constexpr double kTolerance = 1e-12;
+  const Eigen::Vector3d centre(0.3, 0.3, 0.3);  // volume frame, m
+  Eigen::Isometry3d a = Eigen::Isometry3d::Identity();
+  a.translation() = Eigen::Vector3d(1, 2, 3);
+  // 10 deg about the vertical through the centre: the centre stays, the angle is 10 deg.
+  const Eigen::Isometry3d turn = Eigen::Translation3d(a * centre) *
+                                 Eigen::AngleAxisd(10.0 * M_PI / 180.0, Eigen::Vector3d::UnitY()) *
+                                 Eigen::Translation3d(-(a * centre));
+  PoseChange c = poseChange(a, turn * a, centre);
+  EXPECT_NEAR(c.centre_m, 0.0, kTolerance);
+  EXPECT_NEAR(c.angle_deg, 10.0, kTolerance);
+  // 2 cm along x in the world: the centre moves 2 cm, no angle.
+  const Eigen::Isometry3d shift(Eigen::Translation3d(0.02, 0, 0));
+  c = poseChange(a, shift * a, centre);
+  EXPECT_NEAR(c.centre_m, 0.02, kTolerance);
+  EXPECT_NEAR(c.angle_deg, 0.0, kTolerance);
+}
+
+TEST(ObjectRules, StillOnceEveryPoseOfTheWindowIsWithinTheBounds) {
+  ObjectOptions o;
+  o.still_translation_m = 0.01;
+  o.still_rotation_deg = 1.0;
+  o.still_frames = 15;
+  const Eigen::Vector3d centre(0.3, 0.3, 0.3);
+  // The volume pose with its centre moved x_m along x and turned yaw_deg about it.
+  const auto at = [&](double x_m, double yaw_deg) {
+    return Eigen::Isometry3d(Eigen::Translation3d(Eigen::Vector3d(x_m, 0, 2) + centre) *
+                             Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitY()) *
+                             Eigen::Translation3d(-centre));
+  };
+  // Jitter of 4 mm and 0.4 deg about a pose: still once 15 poses are there, not before.
+  std::vector<Eigen::Isometry3d> window;
+  for (int i = 0; i < 15; ++i) {
+    window.push_back(at(i % 2 ? 0.004 : -0.004, i % 3 ? 0.4 : -0.4));
+    EXPECT_EQ(looksStill(window, centre, o), i == 14) << i;
+  }
+  // A slow push of 1 mm per frame: 14 mm over the window, not still.
+  std::vector<Eigen::Isometry3d> push;
+  for (int i = 0; i < 15; ++i) push.push_back(at(0.001 * i, 0.0));
+  EXPECT_FALSE(looksStill(push, centre, o));
+  // A turn of 0.1 deg per frame: 1.4 deg over the window, not still.
+  std::vector<Eigen::Isometry3d> turn;
+  for (int i = 0; i < 15; ++i) turn.push_back(at(0.0, 0.1 * i));
+  EXPECT_FALSE(looksStill(turn, centre, o));
+  // Held: released by a pose 1.1 cm or 1.1 deg away, not by one within the bounds.
+  EXPECT_TRUE(isStillAt(at(0, 0), at(0.009, 0.9), centre, o));
+  EXPECT_FALSE(isStillAt(at(0, 0), at(0.011, 0.0), centre, o));
+  EXPECT_FALSE(isStillAt(at(0, 0), at(0.0, 1.1), centre, o));
+  // Off (the paper): never still.
+  o.still_translation_m = 0.0;
+  EXPECT_FALSE(looksStill(window, centre, o));
+}
+
 TEST(ObjectRules, OcclusionCountsRenderedPixelsBehindNearerMeasurements) {
   // An object rendered at 2 m on a 4x3 patch; margin 0.05 m + 0.01 z^2 = 0.09 m at 2 m.
   cv::Mat rendered(6, 8, CV_32F, cv::Scalar(NAN));
