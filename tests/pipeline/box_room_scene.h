@@ -53,6 +53,31 @@ inline core::Detection exactDetection(const core::Frame& f, int id) {
   return det;
 }
 
+/// The error of an object's tracked pose where it matters to a user: a point of the object
+/// (its frame, m), seen from the camera, estimated against true, as object-<id>.txt is
+/// scored. The estimate's object frame (placed at creation) is mapped onto the true one on
+/// the first call.
+class PointError {
+ public:
+  PointError(int object_id, const Eigen::Vector3d& point) : id_(object_id), point_(point) {}
+  /// Metres, for the estimate T_object_camera of frame `f`.
+  double operator()(const core::Frame& f, const Eigen::Isometry3d& T_object_camera) {
+    const Eigen::Isometry3d T_object_camera_gt =
+        f.T_world_object_gt.at(id_).inverse() * *f.T_world_camera_gt;
+    if (!started_) T_gt_est_ = T_object_camera_gt * T_object_camera.inverse();
+    started_ = true;
+    return ((T_gt_est_ * T_object_camera).inverse() * point_ -
+            T_object_camera_gt.inverse() * point_)
+        .norm();
+  }
+
+ private:
+  int id_;
+  Eigen::Vector3d point_;
+  bool started_ = false;
+  Eigen::Isometry3d T_gt_est_ = Eigen::Isometry3d::Identity();  // estimated frame -> true
+};
+
 /// A 64 MiB pool and a 5.12 m background at 2 cm: room enough for the small scene. The tests
 /// detect their objects once: an object is reported from its first detection
 /// (objects.confirm_detections 1; tests/pipeline/slam_confirm_test.cpp tests confirmation).

@@ -65,7 +65,7 @@ BoxRun runScene(double leaving_fraction) {
   SlamSystem slam(ctx, config, src.intrinsics());
   BoxRun run;
   core::Frame f;
-  Eigen::Isometry3d T_gt_est = Eigen::Isometry3d::Identity();  // estimated object frame -> true
+  test_scene::PointError centre_error(kBoxId, kBoxCentre);
   Eigen::Isometry3d T_world_held = Eigen::Isometry3d::Identity();
   double error_sum = 0;
   while (src.next(f) && run.deleted_frame < 0) {
@@ -87,15 +87,7 @@ BoxRun runScene(double leaving_fraction) {
         T_world_held = o.T_world_object;
       }
       if (o.state != ObjectState::kTracked) continue;
-      // The camera in the box's frame, estimated and true, as object-<id>.txt is scored; the
-      // estimate's object frame (placed at creation) is mapped onto the true one there.
-      const Eigen::Isometry3d T_object_camera_gt =
-          f.T_world_object_gt.at(kBoxId).inverse() * *f.T_world_camera_gt;
-      if (run.tracked_frames == 0) T_gt_est = T_object_camera_gt * o.T_object_camera.inverse();
-      // The error of the box centre seen from the camera.
-      const double e = ((T_gt_est * o.T_object_camera).inverse() * kBoxCentre -
-                        T_object_camera_gt.inverse() * kBoxCentre)
-                           .norm();
+      const double e = centre_error(f, o.T_object_camera);
       run.max_error_m = std::max(run.max_error_m, e);
       error_sum += e;
       ++run.tracked_frames;

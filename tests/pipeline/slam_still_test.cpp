@@ -59,7 +59,7 @@ BoxRun runScene(double still_translation_m) {
   SlamSystem slam(ctx, config, src.intrinsics());
   BoxRun run;
   core::Frame f;
-  Eigen::Isometry3d T_gt_est = Eigen::Isometry3d::Identity();  // estimated object frame -> true
+  test_scene::PointError centre_error(kBoxId, kBoxCentre);
   Eigen::Isometry3d T_world_last = Eigen::Isometry3d::Identity();
   while (src.next(f)) {
     std::vector<core::Detection> dets;
@@ -68,12 +68,7 @@ BoxRun runScene(double still_translation_m) {
     EXPECT_FALSE(out.lost) << "frame " << f.index;
     for (const ObjectOutcome& o : out.objects) {
       if (o.id != kBoxId || o.state != ObjectState::kTracked) continue;
-      const Eigen::Isometry3d T_object_camera_gt =
-          f.T_world_object_gt.at(kBoxId).inverse() * *f.T_world_camera_gt;
-      if (run.tracked_frames == 0) T_gt_est = T_object_camera_gt * o.T_object_camera.inverse();
-      const double e = ((T_gt_est * o.T_object_camera).inverse() * kBoxCentre -
-                        T_object_camera_gt.inverse() * kBoxCentre)
-                           .norm();
+      const double e = centre_error(f, o.T_object_camera);
       const bool held = run.tracked_frames > 0 && o.T_world_object.isApprox(T_world_last, 1e-12);
       if (f.index < kPushFirstFrame) {
         run.max_still_error_m = std::max(run.max_still_error_m, e);
