@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "common/error.h"
+#include "synth/apartment.h"
 #include "synth/shapes.h"
 
 namespace emf::synth {
@@ -165,13 +166,16 @@ Scene enter() {
 
 }  // namespace
 
-std::vector<std::string> presetNames() { return {"room", "cars", "occlusion", "enter"}; }
+std::vector<std::string> presetNames() {
+  return {"room", "cars", "occlusion", "enter", "apartment"};
+}
 
 Scene makePreset(const std::string& name) {
   if (name == "room") return room();
   if (name == "cars") return cars();
   if (name == "occlusion") return occlusion();
   if (name == "enter") return enter();
+  if (name == "apartment") return apartment();
   std::string valid;
   for (const auto& n : presetNames()) valid += (valid.empty() ? "" : ", ") + n;
   throw IoError("synth: unknown preset '" + name + "': valid presets are " + valid);

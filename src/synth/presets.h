@@ -1,7 +1,7 @@
 // The built-in synthetic scenes (`synth:<preset>`). World frame: z up, floor z = 0, metres; time
-// in seconds at 30 frames per second. In every preset the camera is hand-held-like: it sweeps
-// sideways on a smooth path (0.2-0.4 m/s) looking at a slowly wandering point, with a little
-// tremor; rotation stays well under 1 deg per frame.
+// in seconds at 30 frames per second. In every preset the camera is hand-held-like: it moves on
+// a smooth path (0.2-0.4 m/s; the first four sweep sideways looking at a slowly wandering point,
+// apartment walks a loop) with a little tremor; rotation stays under 1 deg per frame.
 //
 //  room       static room with furniture (table with a ball, vase and bottle, chairs, shelf,
 //             sofa, lamp, picture). Nothing moves but the camera. Default 300 frames.
@@ -17,6 +17,15 @@
 //  enter      a "couch" (id 1, about 2 m wide) enters from the right image border between
 //             1.5 s and 6.5 s, turning slightly, stops near the image centre, shifts again
 //             between 8 s and 9.5 s, then stays. Default 300 frames.
+//  apartment  a static flat (12 x 9 m, 2.5 m ceilings: hallway, living room, kitchen, study,
+//             bedroom; 0.1 m walls, doorways 0.96 m clear with frames and open door leaves,
+//             furniture in every room and along the hallway; apartment.cpp). Unlike the
+//             sweeps above, the camera walks one closed loop through all rooms and doorways
+//             (36.5 m, a smooth spline sampled every frame): eye height 1.45-1.55 m, looking
+//             1.5 m ahead along the path and about 17 deg down, at up to 0.36 m/s (slower in
+//             turns: the view turns at most ~27 deg/s), from rest back to rest at the start
+//             pose. Every view has surfaces within 4 m on at least 60 % of the image. Nothing
+//             moves but the camera. Default 3074 frames (102 s).
 //
 // The seed does not change the geometry or the motion (so ground truth is comparable across
 // seeds); it drives the depth noise, colour noise and the simulated detector.

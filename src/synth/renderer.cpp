@@ -55,23 +55,52 @@ Prepared prepare(const Primitive& prim, const Eigen::Isometry3d& T_world_primiti
   V3 h;
   if (!localBounds(prim.geometry, &h)) return p;
   const Eigen::Isometry3d T_camera_primitive = T_primitive_camera.inverse();
-  double umin = kInf, umax = -kInf, vmin = kInf, vmax = -kInf;
+  Eigen::Vector3d c[8];
+  int behind = 0;  // corners closer than near_m
+  double min_depth = kInf;
   for (int k = 0; k < 8; ++k) {
     const Eigen::Vector3d corner((k & 1) ? h.x : -h.x, (k & 2) ? h.y : -h.y, (k & 4) ? h.z : -h.z);
-    const Eigen::Vector3d c = T_camera_primitive * corner;
-    if (c.z() < near_m) return p;  // straddles the camera plane: keep the whole image
-    p.min_depth_m = k == 0 ? c.z() : std::min(p.min_depth_m, c.z());
-    const double u = K.fx * c.x() / c.z() + K.cx, v = K.fy * c.y() / c.z() + K.cy;
+    c[k] = T_camera_primitive * corner;
+    if (c[k].z() < near_m) ++behind;
+    min_depth = std::min(min_depth, c[k].z());
+  }
+  if (behind == 8) {
+    // Wholly closer than near_m (behind the camera, say): no hit can have t >= near_m.
+    p.u0 = 0;
+    p.u1 = -1;
+    return p;
+  }
+  // The box cut by the near plane is the hull of its corners in front and of the points where
+  // its edges cross the plane; its projection is the hull of theirs.
+  double umin = kInf, umax = -kInf, vmin = kInf, vmax = -kInf;
+  auto extend = [&](const Eigen::Vector3d& q) {
+    const double u = K.fx * q.x() / q.z() + K.cx, v = K.fy * q.y() / q.z() + K.cy;
     umin = std::min(umin, u);
     umax = std::max(umax, u);
     vmin = std::min(vmin, v);
     vmax = std::max(vmax, v);
+  };
+  for (int k = 0; k < 8; ++k) {
+    if (c[k].z() < near_m) continue;
+    extend(c[k]);
+    for (int bit : {1, 2, 4}) {
+      const Eigen::Vector3d& b = c[k ^ bit];
+      if (b.z() >= near_m) continue;
+      const double f = (c[k].z() - near_m) / (c[k].z() - b.z());
+      Eigen::Vector3d q = c[k] + f * (b - c[k]);
+      q.z() = near_m;
+      extend(q);
+    }
   }
-  // Convex hull of the projected corners contains the projection: pixel centres inside it.
-  p.u0 = std::max(0, static_cast<int>(std::floor(umin)));
-  p.u1 = std::min(K.width - 1, static_cast<int>(std::ceil(umax)));
-  p.v0 = std::max(0, static_cast<int>(std::floor(vmin)));
-  p.v1 = std::min(K.height - 1, static_cast<int>(std::ceil(vmax)));
+  // A box straddling the near plane keeps min depth 0 (never skipped, scanned last).
+  if (behind == 0) p.min_depth_m = min_depth;
+  // The pixel centres inside that hull's bounding rectangle (clamped to the image first: points
+  // just in front of the camera project far outside it).
+  const double W = K.width, H = K.height;
+  p.u0 = static_cast<int>(std::floor(std::clamp(umin, 0.0, W)));
+  p.u1 = static_cast<int>(std::ceil(std::clamp(umax, -1.0, W - 1)));
+  p.v0 = static_cast<int>(std::floor(std::clamp(vmin, 0.0, H)));
+  p.v1 = static_cast<int>(std::ceil(std::clamp(vmax, -1.0, H - 1)));
   return p;
 }
 

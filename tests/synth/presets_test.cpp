@@ -57,7 +57,7 @@ TEST(SynthPresets, UnknownPresetListsValidOnes) {
     FAIL() << "expected IoError";
   } catch (const IoError& e) {
     EXPECT_NE(std::string(e.what()).find("unknown preset 'garden': valid presets are room, cars, "
-                                         "occlusion, enter"),
+                                         "occlusion, enter, apartment"),
               std::string::npos)
         << e.what();
   }

@@ -82,7 +82,8 @@ TEST(CliSynth, UsageErrors) {
   const std::string out = test::tempDir("cli-synth-bad") + "/x";
   std::string log;
   EXPECT_EQ(test::runCommand(cli() + " synth kitchen --out " + out, &log), 2);
-  EXPECT_NE(log.find("unknown preset 'kitchen': valid presets are room, cars, occlusion, enter"),
+  EXPECT_NE(log.find("unknown preset 'kitchen': valid presets are room, cars, occlusion, enter, "
+                     "apartment, and random"),
             std::string::npos)
       << log;
   EXPECT_EQ(test::runCommand(cli() + " synth room", &log), 2);

@@ -49,7 +49,7 @@ TEST(SynthSource, QueryParametersAndErrors) {
 
   std::string e = errorOf("kitchen", {});
   EXPECT_NE(e.find("unknown preset 'kitchen'"), std::string::npos) << e;
-  EXPECT_NE(e.find("room, cars, occlusion, enter"), std::string::npos) << e;
+  EXPECT_NE(e.find("room, cars, occlusion, enter, apartment"), std::string::npos) << e;
   e = errorOf("room", {{"fps", "60"}});
   EXPECT_NE(e.find("unknown query parameter 'fps'"), std::string::npos) << e;
   EXPECT_NE(e.find("frames, seed, width, height, det_every, noise, threads"), std::string::npos)
