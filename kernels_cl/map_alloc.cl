@@ -15,8 +15,10 @@
 // Volume life cycle:
 //   release_blocks       one work-item per grid block: pushes the block's slots back on the free
 //                        list and zeroes their voxels (so a slot is always clean when taken).
-//   reindex_blocks       one work-item per block of a grown grid: copies the old slot entry
-//                        shifted by whole blocks (voxels are not copied).
+//   reindex_blocks       one work-item per block of a grown or shifted grid: copies the old
+//                        slot entry shifted by whole blocks (voxels are not copied).
+//   evict_blocks         one work-item per grid block: releases the blocks a shift of the grid
+//                        by whole blocks moves out of it (a background following the camera).
 #include "map_common.clh"
 
 // Pool state (int[4]).
@@ -193,4 +195,20 @@ __kernel void reindex_blocks(__global const int* old_index, const int4 old_dims,
     slot = old_index[emf_block_linear(old_dims, b)];
   }
   new_index[i] = slot;
+}
+
+// Blocks b with b - shift outside [0, dims) leave the grid when its origin moves by `shift`
+// blocks: their slots go back on the free list (zeroed) and the volume's allocated count drops.
+__kernel void evict_blocks(__global int* index, const int4 dims, const int4 shift,
+                           __global int* free_list, __global int* pool_state,
+                           __global short2* voxels, __global int* volume_state) {
+  const int i = get_global_id(0);
+  if (i >= dims.x * dims.y * dims.z) return;
+  const int slot = index[i];
+  if (slot < 0) return;
+  const int4 b = emf_block_coords(dims, i) - shift;
+  if (b.x >= 0 && b.y >= 0 && b.z >= 0 && b.x < dims.x && b.y < dims.y && b.z < dims.z) return;
+  emf_release_slot(free_list, pool_state, voxels, slot);
+  index[i] = -1;
+  atomic_dec(&volume_state[EMF_VOL_ALLOCATED]);
 }

@@ -194,7 +194,9 @@ typedef struct emf_mesh {
 } emf_mesh;
 
 /** Extracts the mesh of volume `volume_id` (0 = background, else an object id) in world
- *  coordinates (objects at their current pose) into a new mesh (*out; NULL on error).
+ *  coordinates (objects at their current pose) into a new mesh (*out; NULL on error). The
+ *  background's mesh includes the surface of the blocks its grid left while following the
+ *  camera (map.follow_camera; kept on disk in the system's temporary folder until then).
  *  EMF_ERROR_NOT_FOUND for an unknown id, EMF_ERROR_STATE before set_intrinsics. Not
  *  concurrent with emf_system_process_frame. */
 EMF_API emf_status emf_system_extract_mesh(emf_system* system, int32_t volume_id, emf_mesh** out);

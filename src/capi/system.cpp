@@ -178,18 +178,21 @@ const map::Volume& volumeOf(const emf_system& system, int32_t volume_id, const c
   return *volume;
 }
 
+/// The background's mesh includes the surface its moving grid left behind (map.follow_camera).
 void extract(const emf_system& system, int32_t volume_id, const char* function,
              map::MeshSink& sink) {
-  const map::VolumeHostAccess access(volumeOf(system, volume_id, function));
+  const map::Volume& volume = volumeOf(system, volume_id, function);
+  if (volume_id == 0) return system.slam->extractBackgroundMesh(sink);
+  const map::VolumeHostAccess access(volume);
   map::extractMesh(access.view(), access.T_world_volume(), map::MeshOptions(), sink);
 }
 
 /// Streamed into the file: the mesh is never held in memory as a whole.
 void saveMesh(const emf_system& system, int32_t volume_id, const std::string& path,
               const char* function) {
-  const map::VolumeHostAccess access(volumeOf(system, volume_id, function));
+  volumeOf(system, volume_id, function);  // checks the id before the file is created
   io::PlyWriter ply(path, true);
-  map::extractMesh(access.view(), access.T_world_volume(), map::MeshOptions(), ply);
+  extract(system, volume_id, function, ply);
   ply.commit();
 }
 

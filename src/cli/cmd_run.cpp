@@ -133,6 +133,7 @@ int cmdRun(const std::vector<std::string>& args) {
   }
   cl::Context& ctx = *ctx_ptr;
   pipeline::SlamSystem& slam = *slam_ptr;
+  slam.setEvictedSurfaceFolder(out_dir);  // background.ply takes it in at every mesh written
   pipeline::ObjectOutputs objects(out_dir, config.output.binary_ply, info.run_id);
   slam.setDeletionHook(
       [&objects](const pipeline::TrackedObject& o) { objects.onObjectDeleted(o.id, *o.volume); });

@@ -21,6 +21,13 @@ struct MapOptions {
   /// Initial camera placement: offset of the camera from the background volume centre along
   /// its viewing axis, as a fraction of the extent (0.5 = centre of one face, looking in).
   double initial_camera_face_offset = 0.5;
+  /// The background follows the camera (docs/architecture.md#a-map-that-follows-the-camera):
+  /// its grid moves by whole blocks when the point the first camera saw at the grid centre
+  /// (initial_camera_face_offset times the extent ahead of the camera) is farther than
+  /// follow_trigger_m (at least one block) from the centre along a grid axis; the blocks that
+  /// leave the grid are meshed into the background mesh and return their slots to the pool.
+  bool follow_camera = true;
+  double follow_trigger_m = 1.0;
   /// Ray casting: nearest and farthest camera z rendered.
   double raycast_min_depth_m = 0.1;
   double raycast_max_depth_m = 8.0;
@@ -42,6 +49,10 @@ struct MapOptions {
               "integrate free space with weight 1 regardless of association");
     b.real("initial_camera_face_offset", initial_camera_face_offset, 0.0, 0.5, "extent",
            "camera offset from the volume centre along its view axis (0.5 = on a face)");
+    b.boolean("follow_camera", follow_camera,
+              "the background moves with the camera, meshing and freeing what it leaves");
+    b.real("follow_trigger_m", follow_trigger_m, 0.0, 100.0, "m",
+           "the background moves when the view's focus is this far off its centre");
     b.real("raycast_min_depth_m", raycast_min_depth_m, 0.0, 100.0, "m",
            "nearest camera z rendered by ray casting");
     b.real("raycast_max_depth_m", raycast_max_depth_m, 0.01, 1000.0, "m",

@@ -50,10 +50,15 @@ class MeshStreamer {
         current_layer = layer;
       }
       const Eigen::Vector3i base = blockCoords(dims, static_cast<int>(lin)) * kBlockSize;
+      // The block's cubes have their corners in [base, base + kBlockSize].
+      if (options_.leaving && allInside(base, base + Eigen::Vector3i::Constant(kBlockSize))) {
+        continue;
+      }
       for (int lz = 0; lz < kBlockSize; ++lz) {
         for (int ly = 0; ly < kBlockSize; ++ly) {
           for (int lx = 0; lx < kBlockSize; ++lx) {
             const Eigen::Vector3i v0 = base + Eigen::Vector3i(lx, ly, lz);
+            if (options_.leaving && allInside(v0, v0 + Eigen::Vector3i::Ones())) continue;
             float f[8];
             bool ok = true;
             int inside = 0;
@@ -95,6 +100,12 @@ class MeshStreamer {
     Eigen::Vector3f nsum;  // area-weighted sum of the adjacent triangles' normals
   };
   using Triangle = std::array<int64_t, 3>;  // vertex keys
+
+  /// Whether the voxels of [lo, hi] (inclusive) all lie in options_.leaving's box.
+  bool allInside(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi) const {
+    const MeshOptions::VoxelBox& box = *options_.leaving;
+    return (lo.array() >= box.min.array()).all() && (hi.array() < box.max.array()).all();
+  }
 
   /// Key of edge `axis` (0-2) from voxel v, or of loop centre `axis` - 3 (3-6) of cube v.
   int64_t key(const Eigen::Vector3i& v, int slot) const {

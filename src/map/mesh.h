@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,13 @@ struct MeshOptions {
   bool skip_truncated_crossings = true;
   /// Volumes with counts: mesh only cubes whose centre has p_fg > 0.5 (the object's voxels).
   bool foreground_only = true;
+  /// When set, only the cubes with at least one corner outside this box of voxel coordinates
+  /// (volume frame; min included, max excluded) are meshed: the surface that a shift of the
+  /// grid takes out of it (map/volume_follow.h), seams to the staying blocks included.
+  struct VoxelBox {
+    Eigen::Vector3i min, max;
+  };
+  std::optional<VoxelBox> leaving;
 };
 
 /// Receives a mesh in pieces: vertices with consecutive indices from 0 in the order given,

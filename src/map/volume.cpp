@@ -109,6 +109,7 @@ Volume::Volume(VoxelPool& pool, const VolumeSpec& spec, const Eigen::Isometry3d&
   finalize_ = ctx_.kernel("map_alloc", "finalize_allocation");
   release_ = ctx_.kernel("map_alloc", "release_blocks");
   reindex_ = ctx_.kernel("map_alloc", "reindex_blocks");
+  evict_ = ctx_.kernel("map_alloc", "evict_blocks");
   integrate_ = ctx_.kernel("tsdf_integrate", "integrate_blocks");
   if (spec.has_counts) count_ = ctx_.kernel("tsdf_integrate", "count_blocks");
   createBuffers();
@@ -286,7 +287,37 @@ void Volume::grow(const Eigen::Vector3i& add_low_blocks, const Eigen::Vector3i& 
   last_report_.listed_blocks = 0;  // the block list was for the old grid: allocate() again
 }
 
-VolumeHostData Volume::download() const {
+int Volume::shift(const Eigen::Vector3i& blocks) {
+  if (spec_.has_counts) {
+    throw InvalidArgument("Volume::shift: only volumes without counts (the background) shift");
+  }
+  if (blocks.isZero()) return 0;
+  const cl_int4 dims = dimsBlocks();
+  const cl_int4 by{{blocks.x(), blocks.y(), blocks.z(), 0}};
+  const size_t n = static_cast<size_t>(spec_.blockCount());
+  int32_t before = 0, after = 0;
+  ctx_.read(state_, &before, sizeof(before), 1 * sizeof(int32_t));  // EMF_VOL_ALLOCATED
+  cl::setArgs(evict_, index_, dims, by, pool_.freeList(), pool_.state(), pool_.voxels(), state_);
+  cl::enqueue(ctx_.queue(), evict_, n, 0, 0, 256);
+  // New entry b = old entry b + blocks, through the block list (an int per block, free between
+  // frames) so that no buffer is allocated.
+  const cl_int4 offset{{-blocks.x(), -blocks.y(), -blocks.z(), 0}};
+  cl::setArgs(reindex_, index_, dims, block_list_, dims, offset);
+  cl::enqueue(ctx_.queue(), reindex_, n, 0, 0, 256);
+  EMF_CL_CHECK(clEnqueueCopyBuffer(ctx_.queue(), block_list_.get(), index_.get(), 0, 0,
+                                   n * sizeof(int32_t), 0, nullptr, nullptr));
+  ctx_.read(state_, &after, sizeof(after), 1 * sizeof(int32_t));
+  Eigen::Isometry3d move = Eigen::Isometry3d::Identity();
+  move.translation() = blocks.cast<double>() *
+                       (static_cast<double>(kBlockSize) * static_cast<double>(spec_.voxel_size_m));
+  T_world_volume_ = T_world_volume_ * move;
+  T_volume_initial_ = move.inverse() * T_volume_initial_;
+  last_report_.allocated_blocks = after;
+  last_report_.listed_blocks = 0;  // the block list held the re-indexing: allocate() again
+  return before - after;
+}
+
+VolumeHostData Volume::download(const BlockFilter& keep) const {
   VolumeHostData out;
   out.dims_blocks = spec_.dims_blocks;
   out.voxel_size_m = spec_.voxel_size_m;
@@ -299,6 +330,15 @@ VolumeHostData Volume::download() const {
   if (spec_.has_counts) {
     count_index.resize(n);
     ctx_.read(count_index_, count_index.data(), n * sizeof(int32_t));
+  }
+  if (keep) {
+    for (size_t i = 0; i < n; ++i) {
+      if ((index[i] >= 0 || (!count_index.empty() && count_index[i] >= 0)) &&
+          !keep(blockCoords(spec_.dims_blocks, static_cast<int>(i)))) {
+        index[i] = -1;
+        if (!count_index.empty()) count_index[i] = -1;
+      }
+    }
   }
   // Pool slots in use, sorted; read them in contiguous runs.
   std::vector<int32_t> slots;

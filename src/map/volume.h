@@ -16,6 +16,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <functional>
 #include <vector>
 
 #include "cl/context.h"
@@ -130,6 +131,13 @@ class Volume {
   /// block (re-indexed, not copied). The volume origin moves by -add_low blocks, so the world
   /// position of every voxel is unchanged. Allocates the new (larger) index buffers.
   void grow(const Eigen::Vector3i& add_low_blocks, const Eigen::Vector3i& add_high_blocks);
+  /// Moves the grid by whole blocks (volume frame axes), keeping its dims: the volume origin
+  /// moves by +blocks, so every voxel that stays keeps its world position (re-indexed, not
+  /// copied) and the blocks that leave the grid (block coordinates b with b - blocks outside
+  /// the grid) return their slots to the pool, zeroed. Mesh what leaves before (see
+  /// map/volume_follow.h). Only for volumes without counts (the background). Returns the
+  /// blocks released.
+  int shift(const Eigen::Vector3i& blocks);
   /// Returns every slot to the pool (the volume stays usable, empty).
   void clear();
 
@@ -139,8 +147,11 @@ class Volume {
   /// Device bytes of this volume's own buffers (index grids, marks, list, state).
   size_t indexBytes() const;
 
-  /// Copies the allocated blocks to the host (allocates; not for the per-frame path).
-  VolumeHostData download() const;
+  /// Which blocks (grid coordinates) a partial download reads; the others read as unallocated.
+  using BlockFilter = std::function<bool(const Eigen::Vector3i& block)>;
+  /// Copies the allocated blocks (those `keep` accepts, when given) to the host (allocates; not
+  /// for the per-frame path).
+  VolumeHostData download(const BlockFilter& keep = {}) const;
 
   // Device state for other kernels (tracking, E-step, ray casting).
   const cl::MemHandle& index() const { return index_; }
@@ -162,7 +173,7 @@ class Volume {
   Eigen::Isometry3d T_volume_initial_ = Eigen::Isometry3d::Identity();
   bool has_counts_buffer_ = false;
   cl::MemHandle index_, count_index_, needed_, block_list_, state_;
-  cl::KernelHandle mark_, assign_, finalize_, integrate_, count_, release_, reindex_;
+  cl::KernelHandle mark_, assign_, finalize_, integrate_, count_, release_, reindex_, evict_;
   AllocationReport last_report_;
   int32_t report_[4] = {0, 0, 0, 0};
 };

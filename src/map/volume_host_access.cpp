@@ -6,13 +6,16 @@
 
 namespace emf::map {
 
-VolumeHostAccess::VolumeHostAccess(const Volume& volume) : VolumeHostAccess(volume, true) {}
+VolumeHostAccess::VolumeHostAccess(const Volume& volume, const Volume::BlockFilter& keep)
+    : VolumeHostAccess(volume, true, keep) {}
 
-VolumeHostAccess VolumeHostAccess::downloaded(const Volume& volume) {
-  return VolumeHostAccess(volume, false);
+VolumeHostAccess VolumeHostAccess::downloaded(const Volume& volume,
+                                              const Volume::BlockFilter& keep) {
+  return VolumeHostAccess(volume, false, keep);
 }
 
-VolumeHostAccess::VolumeHostAccess(const Volume& volume, bool allow_mapping)
+VolumeHostAccess::VolumeHostAccess(const Volume& volume, bool allow_mapping,
+                                   const Volume::BlockFilter& keep)
     : T_world_volume_(volume.T_world_volume()), T_volume_initial_(volume.T_volume_initial()) {
   const VoxelPool& pool = volume.pool();
   const cl::Context& ctx = pool.context();
@@ -21,7 +24,7 @@ VolumeHostAccess::VolumeHostAccess(const Volume& volume, bool allow_mapping)
   // pool would be copied whole; there the used blocks are downloaded instead.
   mapped_ = allow_mapping && ctx.device().type == "cpu" && ctx.device().host_unified_memory;
   if (!mapped_) {
-    copy_ = std::make_unique<VolumeHostData>(volume.download());
+    copy_ = std::make_unique<VolumeHostData>(volume.download(keep));
     view_ = copy_->view();
     return;
   }

@@ -23,10 +23,11 @@ namespace emf::map {
 
 class VolumeHostAccess {
  public:
-  /// Maps (CPU device) or downloads `volume`. Throws ClError / ResourceError.
-  explicit VolumeHostAccess(const Volume& volume);
+  /// Maps (CPU device) or downloads `volume`; a download reads only the blocks `keep` accepts
+  /// when it is given (a mapping shows them all). Throws ClError / ResourceError.
+  explicit VolumeHostAccess(const Volume& volume, const Volume::BlockFilter& keep = {});
   /// Always downloads (tests compare both ways).
-  static VolumeHostAccess downloaded(const Volume& volume);
+  static VolumeHostAccess downloaded(const Volume& volume, const Volume::BlockFilter& keep = {});
   ~VolumeHostAccess();
   VolumeHostAccess(VolumeHostAccess&&) noexcept;
   VolumeHostAccess& operator=(VolumeHostAccess&&) = delete;
@@ -42,7 +43,7 @@ class VolumeHostAccess {
   bool mapped() const { return mapped_; }
 
  private:
-  VolumeHostAccess(const Volume& volume, bool allow_mapping);
+  VolumeHostAccess(const Volume& volume, bool allow_mapping, const Volume::BlockFilter& keep);
 
   VolumeHostView view_;
   Eigen::Isometry3d T_world_volume_ = Eigen::Isometry3d::Identity();

@@ -152,7 +152,9 @@ std::string runSummaryJson(const SlamSystem& slam, const cl::Context& ctx, const
                  {"dropped_blocks", pool.dropped_blocks},
                  {"background_pool_full_frames", slam.backgroundPoolFullFrames()},
                  {"objects_refused_for_pool", slam.poolRefusedObjects()},
-                 {"background_index_bytes", slam.background().indexBytes()}};
+                 {"background_index_bytes", slam.background().indexBytes()},
+                 {"background_shifts", slam.backgroundShifts()},
+                 {"evicted_blocks", slam.evictedBlocks()}};
   j["device"] = {{"name", ctx.device().device_name},
                  {"platform", ctx.device().platform_name},
                  {"driver", ctx.device().driver_version},
@@ -170,10 +172,10 @@ std::string runSummaryJson(const SlamSystem& slam, const cl::Context& ctx, const
 }
 
 void writeBackgroundMesh(const std::string& dir, SlamSystem& slam, bool binary_ply) {
-  // Streamed from the mapped volume into the file: no host copy of the map, no mesh in memory.
-  const map::VolumeHostAccess access(slam.background());
+  // Streamed from the mapped volume (and the surface the moving map left, on disk) into the
+  // file: no host copy of the map, no mesh in memory.
   io::PlyWriter ply(dir + "/background.ply", binary_ply);
-  map::extractMesh(access.view(), access.T_world_volume(), map::MeshOptions(), ply);
+  slam.extractBackgroundMesh(ply);
   ply.commit();
 }
 

@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 
 #include "cl/work_counters.h"
 #include "common/error.h"
 #include "common/log.h"
+#include "map/volume_host_access.h"
 
 namespace emf::pipeline {
 
@@ -44,6 +46,7 @@ SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const core::Intri
   const map::VolumeSpec spec = map::VolumeSpec::background(config.map);
   background_ = std::make_unique<map::Volume>(
       *pool_, spec, map::backgroundVolumePose(config.map, spec, Eigen::Isometry3d::Identity()));
+  follow_ = map::followRule(config.map, spec);
   objects_ = std::make_unique<ObjectLifecycle>(ctx, config, intrinsics_, *pool_, *background_,
                                                preprocessor_, estep_, timer_, counters_);
   const double index_mib = static_cast<double>(background_->indexBytes()) / (1 << 20);
@@ -157,6 +160,7 @@ FrameOutcome SlamSystem::process(const core::Frame& frame,
       in.intrinsics = intrinsics_;
       in.T_world_camera = T_world_camera_;
       in.weights = objects_->backgroundWeights();
+      if (config_.map.follow_camera) followCamera(&out);
       out.allocation = integrateBackground(in);
       objects_->integrate(in);
       ctx_.finish();
@@ -195,6 +199,62 @@ map::AllocationReport SlamSystem::integrateBackground(const map::IntegrationInpu
     }
   }
   return report;
+}
+
+void SlamSystem::followCamera(FrameOutcome* out) {
+  const Eigen::Vector3i blocks = map::followShift(
+      background_->spec(), background_->T_world_volume(), T_world_camera_, follow_);
+  if (blocks.isZero()) return;
+  if (!evicted_) {
+    std::string folder = evicted_folder_;
+    if (folder.empty()) {
+      std::error_code ec;
+      folder = std::filesystem::temp_directory_path(ec).string();
+    }
+    evicted_ = std::make_unique<io::MeshSpool>(folder);
+  }
+  evicted_->beginPart();
+  map::extractLeavingMesh(*background_, blocks, *evicted_);
+  out->map_shift = blocks;
+  out->evicted_blocks = background_->shift(blocks);
+  ++shifts_;
+  evicted_blocks_ += out->evicted_blocks;
+  logDebug("frame ", frames_, ": background moved by (", blocks.x(), ", ", blocks.y(), ", ",
+           blocks.z(), ") blocks, ", out->evicted_blocks, " blocks left it");
+}
+
+namespace {
+/// Offsets the triangle indices of a mesh streamed after `base` vertices.
+class OffsetSink : public map::MeshSink {
+ public:
+  OffsetSink(map::MeshSink& target, size_t base) : target_(target), base_(base) {}
+  void addVertices(const Eigen::Vector3f* positions, const Eigen::Vector3f* normals,
+                   size_t count) override {
+    target_.addVertices(positions, normals, count);
+  }
+  void addTriangles(const Eigen::Vector3i* triangles, size_t count) override {
+    if (base_ == 0) return target_.addTriangles(triangles, count);
+    shifted_.assign(triangles, triangles + count);
+    for (Eigen::Vector3i& t : shifted_) t.array() += static_cast<int>(base_);
+    target_.addTriangles(shifted_.data(), count);
+  }
+
+ private:
+  map::MeshSink& target_;
+  size_t base_;
+  std::vector<Eigen::Vector3i> shifted_;
+};
+}  // namespace
+
+void SlamSystem::extractBackgroundMesh(map::MeshSink& sink) const {
+  size_t base = 0;
+  if (evicted_) {
+    evicted_->replay(sink);
+    base = evicted_->vertexCount();
+  }
+  OffsetSink offset(sink, base);
+  const map::VolumeHostAccess access(*background_);
+  map::extractMesh(access.view(), access.T_world_volume(), map::MeshOptions(), offset);
 }
 
 DetectorStats SlamSystem::detectorStats() const {

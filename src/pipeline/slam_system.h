@@ -5,7 +5,8 @@
 //
 // Frames: world W = the first camera's frame (T_world_camera of frame 0 is the identity); the
 // background volume V is placed so that this camera sits at the centre of one face looking in
-// (map.initial_camera_face_offset). Poses are T_a_b (maps points in b to a).
+// (map.initial_camera_face_offset) and, with map.follow_camera, moves by whole blocks to follow
+// the camera (map/volume_follow.h). Poses are T_a_b (maps points in b to a).
 #pragma once
 
 #include <Eigen/Geometry>
@@ -17,8 +18,10 @@
 #include "cl/context.h"
 #include "core/frame.h"
 #include "em/estep.h"
+#include "io/mesh_spool.h"
 #include "map/raycaster.h"
 #include "map/volume.h"
+#include "map/volume_follow.h"
 #include "map/voxel_pool.h"
 #include "pipeline/config.h"
 #include "pipeline/detector_scheduler.h"
@@ -37,6 +40,10 @@ struct FrameOutcome {
   Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();  // estimate (last good if lost)
   bool first = false;  // the first frame: placed, not tracked
   bool lost = false;   // tracking failed: the frame was not integrated
+  /// The background's move this frame (whole blocks along its grid axes; map.follow_camera)
+  /// and the blocks that left it.
+  Eigen::Vector3i map_shift = Eigen::Vector3i::Zero();
+  int evicted_blocks = 0;
   std::string loss_reason;
   track::TrackResult track;          // of the background (unset on the first frame)
   map::AllocationReport allocation;  // of the background integration (unset when lost)
@@ -113,6 +120,15 @@ class SlamSystem {
   /// Frames on which the background could not get a slot for every block it needed (its map is
   /// incomplete there: map.memory_mb is too small for the scene).
   int64_t backgroundPoolFullFrames() const { return background_pool_full_frames_; }
+  /// The background's moves (map.follow_camera) and the blocks they took out of it, summed.
+  int64_t backgroundShifts() const { return shifts_; }
+  int64_t evictedBlocks() const { return evicted_blocks_; }
+  /// Where the surface of evicted blocks waits until a background mesh is written (two unlinked
+  /// temporary files; default the system's temporary folder). Set before the first frame.
+  void setEvictedSurfaceFolder(const std::string& folder) { evicted_folder_ = folder; }
+  /// The background mesh, world frame: the surface of every block the background left behind,
+  /// then the current grid's (map::extractMesh), streamed to `sink` with indices from 0.
+  void extractBackgroundMesh(map::MeshSink& sink) const;
   /// Objects not created because the pool had too little room (objects.min_free_pool_fraction).
   int64_t poolRefusedObjects() const { return objects_->poolRefusedObjects(); }
   /// The objects and their rules.
@@ -129,6 +145,8 @@ class SlamSystem {
   cv::Mat backgroundSdf(const cv::Mat& vertex);
   /// The background's integration of this frame.
   map::AllocationReport integrateBackground(const map::IntegrationInput& in);
+  /// map.follow_camera: moves the background to follow the camera, keeping what leaves it.
+  void followCamera(FrameOutcome* out);
 
   cl::Context& ctx_;
   Config config_;
@@ -150,6 +168,10 @@ class SlamSystem {
   int64_t frames_ = 0;
   int64_t lost_ = 0;
   int64_t background_pool_full_frames_ = 0;  // frames on which background blocks found no slot
+  map::FollowRule follow_;
+  std::string evicted_folder_;
+  std::unique_ptr<io::MeshSpool> evicted_;  // created on the first move
+  int64_t shifts_ = 0, evicted_blocks_ = 0;
 };
 
 }  // namespace emf::pipeline

@@ -8,6 +8,7 @@
 #include <random>
 
 #include "common/error.h"
+#include "eval/surface_coverage.h"
 #include "io_test_util.h"
 #include "test_support.h"
 
@@ -492,6 +493,22 @@ TEST(EvalCli, UsageAndErrors) {
   EXPECT_NE(text.find("--min-coverage is a fraction of the timestamps in [0, 1], got '2'"),
             std::string::npos)
       << text;
+}
+
+// Surface coverage: a point is covered by a reference point within the distance, across cell
+// borders and not beyond it.
+TEST(SurfaceCoverage, CountsPointsWithAReferencePointWithinTheDistance) {
+  const std::vector<Eigen::Vector3f> reference = {{0.0f, 0.0f, 0.0f}, {1.0f, 1.0f, 1.0f}};
+  const std::vector<Eigen::Vector3f> points = {
+      {0.009f, 0.0f, 0.0f},     // within 1 cm of the first
+      {-0.006f, 0.006f, 0.0f},  // 8.5 mm, in a neighbouring cell
+      {0.0f, 0.0f, 0.011f},     // 1.1 cm: not covered
+      {1.0f, 1.0f, 0.995f},     // the second
+      {5.0f, 5.0f, 5.0f}};      // far from both
+  EXPECT_EQ(eval::uncoveredPoints(reference, points, 0.01), 2u);
+  EXPECT_DOUBLE_EQ(eval::coveredFraction(reference, points, 0.01), 0.6);
+  EXPECT_DOUBLE_EQ(eval::coveredFraction(reference, {}, 0.01), 0.0);
+  EXPECT_DOUBLE_EQ(eval::coveredFraction({}, points, 0.01), 0.0);
 }
 
 }  // namespace

@@ -63,6 +63,18 @@ class MapTest : public WithClQueue {
     return f;
   }
 
+  /// Fuses three views of `scene` (the first camera and two others looking into the room) into
+  /// `volume` at the size of `k`.
+  void fuseThreeViews(map::Volume& volume, const Scene& scene, const core::Intrinsics& k) {
+    const Eigen::Isometry3d T0 = Eigen::Isometry3d::Identity();
+    for (const Eigen::Isometry3d& T :
+         {T0, lookAt(Eigen::Vector3d(0.4, -0.1, 0.2), Eigen::Vector3d(0.0, 0.3, 2.0)),
+          lookAt(Eigen::Vector3d(-0.3, 0.1, 0.5), Eigen::Vector3d(0.3, 0.2, 1.6))}) {
+      Frame f = makeFrame(renderDepth(scene, k, T), k, T);
+      volume.fuse(f.input);
+    }
+  }
+
   /// Runs allocate() + integrate() on the device and the CPU reference on the host copy taken
   /// after allocation; returns the number of voxels beyond tolerance (and the device copy).
   int fuseAndCompare(map::Volume& vol, const Frame& f, map::VolumeHostData* out = nullptr,

@@ -31,12 +31,7 @@ TEST_F(VolumeHostAccessTest, MappedAndDownloadedVolumesGiveTheSameMesh) {
   // Background: three views.
   const map::VolumeSpec spec = map::VolumeSpec::background(o);
   map::Volume bg(pool, spec, map::backgroundVolumePose(o, spec, T0));
-  for (const Eigen::Isometry3d& T :
-       {T0, lookAt(Eigen::Vector3d(0.4, -0.1, 0.2), Eigen::Vector3d(0.0, 0.3, 2.0)),
-        lookAt(Eigen::Vector3d(-0.3, 0.1, 0.5), Eigen::Vector3d(0.3, 0.2, 1.6))}) {
-    Frame f = makeFrame(renderDepth(scene, k, T), k, T);
-    bg.fuse(f.input);
-  }
+  fuseThreeViews(bg, scene, k);
   const map::VolumeHostAccess mapped(bg);
   EXPECT_EQ(mapped.mapped(), ctx().device().type == "cpu" && ctx().device().host_unified_memory);
   const map::VolumeHostAccess copied = map::VolumeHostAccess::downloaded(bg);
