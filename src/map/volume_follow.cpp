@@ -47,10 +47,16 @@ void extractLeavingMesh(const Volume& volume, const Eigen::Vector3i& blocks, Mes
   const Volume::BlockFilter keep = leavingMeshBlocks(blocks, dims);
   const VolumeHostAccess access =
       force_download ? VolumeHostAccess::downloaded(volume, keep) : VolumeHostAccess(volume, keep);
+  extractLeavingMesh(access.view(), access.T_world_volume(), blocks, sink);
+}
+
+void extractLeavingMesh(const VolumeHostView& view, const Eigen::Isometry3d& T_world_volume,
+                        const Eigen::Vector3i& blocks, MeshSink& sink) {
   MeshOptions options;
   // The voxels that stay: blocks b with b - blocks inside the grid.
-  options.leaving = MeshOptions::VoxelBox{blocks * kBlockSize, (blocks + dims) * kBlockSize};
-  extractMesh(access.view(), access.T_world_volume(), options, sink);
+  options.leaving =
+      MeshOptions::VoxelBox{blocks * kBlockSize, (blocks + view.dims_blocks) * kBlockSize};
+  extractMesh(view, T_world_volume, options, sink);
 }
 
 }  // namespace emf::map

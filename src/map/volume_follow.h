@@ -51,5 +51,9 @@ Volume::BlockFilter leavingMeshBlocks(const Eigen::Vector3i& blocks, const Eigen
 /// with `force_download` (tests), it downloads only the leavingMeshBlocks().
 void extractLeavingMesh(const Volume& volume, const Eigen::Vector3i& blocks, MeshSink& sink,
                         bool force_download = false);
+/// The same from a host view of the volume before the shift (e.g. Volume::download of
+/// leavingMeshBlocks(), meshed on another thread).
+void extractLeavingMesh(const VolumeHostView& view, const Eigen::Isometry3d& T_world_volume,
+                        const Eigen::Vector3i& blocks, MeshSink& sink);
 
 }  // namespace emf::map

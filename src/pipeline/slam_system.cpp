@@ -211,10 +211,9 @@ void SlamSystem::followCamera(FrameOutcome* out) {
       std::error_code ec;
       folder = std::filesystem::temp_directory_path(ec).string();
     }
-    evicted_ = std::make_unique<io::MeshSpool>(folder);
+    evicted_ = std::make_unique<EvictedSurface>(folder);
   }
-  evicted_->beginPart();
-  map::extractLeavingMesh(*background_, blocks, *evicted_);
+  evicted_->add(*background_, blocks);  // copies what leaves; meshed on the worker thread
   out->map_shift = blocks;
   out->evicted_blocks = background_->shift(blocks);
   ++shifts_;
@@ -247,11 +246,7 @@ class OffsetSink : public map::MeshSink {
 }  // namespace
 
 void SlamSystem::extractBackgroundMesh(map::MeshSink& sink) const {
-  size_t base = 0;
-  if (evicted_) {
-    evicted_->replay(sink);
-    base = evicted_->vertexCount();
-  }
+  const size_t base = evicted_ ? evicted_->replay(sink) : 0;
   OffsetSink offset(sink, base);
   const map::VolumeHostAccess access(*background_);
   map::extractMesh(access.view(), access.T_world_volume(), map::MeshOptions(), offset);

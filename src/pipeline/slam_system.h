@@ -18,13 +18,13 @@
 #include "cl/context.h"
 #include "core/frame.h"
 #include "em/estep.h"
-#include "io/mesh_spool.h"
 #include "map/raycaster.h"
 #include "map/volume.h"
 #include "map/volume_follow.h"
 #include "map/voxel_pool.h"
 #include "pipeline/config.h"
 #include "pipeline/detector_scheduler.h"
+#include "pipeline/evicted_surface.h"
 #include "pipeline/frame_counters.h"
 #include "pipeline/object_lifecycle.h"
 #include "pipeline/stage_timer.h"
@@ -124,10 +124,12 @@ class SlamSystem {
   int64_t backgroundShifts() const { return shifts_; }
   int64_t evictedBlocks() const { return evicted_blocks_; }
   /// Where the surface of evicted blocks waits until a background mesh is written (two unlinked
-  /// temporary files; default the system's temporary folder). Set before the first frame.
+  /// temporary files, written by a worker thread: pipeline/evicted_surface.h; default the
+  /// system's temporary folder). Set before the first frame.
   void setEvictedSurfaceFolder(const std::string& folder) { evicted_folder_ = folder; }
-  /// The background mesh, world frame: the surface of every block the background left behind,
-  /// then the current grid's (map::extractMesh), streamed to `sink` with indices from 0.
+  /// The background mesh, world frame: the surface of every block the background left behind
+  /// (after the worker has meshed all of it), then the current grid's (map::extractMesh),
+  /// streamed to `sink` with indices from 0. Between frames only.
   void extractBackgroundMesh(map::MeshSink& sink) const;
   /// Objects not created because the pool had too little room (objects.min_free_pool_fraction).
   int64_t poolRefusedObjects() const { return objects_->poolRefusedObjects(); }
@@ -170,7 +172,7 @@ class SlamSystem {
   int64_t background_pool_full_frames_ = 0;  // frames on which background blocks found no slot
   map::FollowRule follow_;
   std::string evicted_folder_;
-  std::unique_ptr<io::MeshSpool> evicted_;  // created on the first move
+  std::unique_ptr<EvictedSurface> evicted_;  // created on the first move
   int64_t shifts_ = 0, evicted_blocks_ = 0;
 };
 
