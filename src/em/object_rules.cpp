@@ -407,6 +407,17 @@ bool isStillAt(const Eigen::Isometry3d& T_world_held, const Eigen::Isometry3d& T
   return c.centre_m <= options.still_translation_m && c.angle_deg <= options.still_rotation_deg;
 }
 
+bool startsMoving(const std::vector<double>& offsets_m, const ObjectOptions& options) {
+  const size_t n = offsets_m.size();
+  if (options.still_translation_m <= 0.0 || n < static_cast<size_t>(kStartFrames) + 1) {
+    return false;
+  }
+  for (size_t i = n - kStartFrames; i < n; ++i) {
+    if (!(offsets_m[i] > offsets_m[i - 1])) return false;
+  }
+  return offsets_m.back() >= 0.25 * options.still_translation_m;
+}
+
 bool looksStill(const std::vector<Eigen::Isometry3d>& window, const Eigen::Vector3d& centre,
                 const ObjectOptions& options) {
   if (options.still_translation_m <= 0.0 || options.still_frames < 2 ||

@@ -204,11 +204,18 @@ bool ObjectLifecycle::holdStill(TrackedObject& o, const Eigen::Isometry3d& T_wor
   Eigen::Vector3d centre = o.volume->spec().extentM().cast<double>() / 2.0;
   if (!o.claim_initial.isEmpty()) centre = o.volume->T_volume_initial() * o.claim_initial.center();
   if (o.still) {
-    if (em::isStillAt(o.volume->T_world_volume(), T_world_tracked, centre, opt)) {
+    const Eigen::Isometry3d& T_world_held = o.volume->T_world_volume();
+    o.held_offsets.push_back(em::poseChange(T_world_held, T_world_tracked, centre).centre_m);
+    if (o.held_offsets.size() > static_cast<size_t>(em::kStartFrames) + 1) {
+      o.held_offsets.erase(o.held_offsets.begin());
+    }
+    if (em::isStillAt(T_world_held, T_world_tracked, centre, opt) &&
+        !em::startsMoving(o.held_offsets, opt)) {
       o.last_motion = last_motion_;  // still in the world
       return true;
     }
     o.still = false;
+    o.held_offsets.clear();
     o.recent_poses.clear();
     logDebug("frame ", frames_, ": object ", o.id, " moves again");
   }

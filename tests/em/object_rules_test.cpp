@@ -381,6 +381,20 @@ TEST(ObjectRules, PoseChangeMeasuresTheCentreAndTheAngle) {
   EXPECT_NEAR(c.angle_deg, 0.0, kTolerance);
 }
 
+TEST(ObjectRules, AHeldObjectStartsMovingWhenItsOffsetGrowsFrameAfterFrame) {
+  ObjectOptions o;
+  o.still_translation_m = 0.02;  // a quarter: 5 mm
+  // A push: 2, 4, 6 mm over three frames after 1 mm.
+  EXPECT_TRUE(startsMoving({0.001, 0.002, 0.004, 0.006}, o));
+  // Too few frames, a jitter that falls back once, or growth that stays below 5 mm: held.
+  EXPECT_FALSE(startsMoving({0.002, 0.004, 0.006}, o));
+  EXPECT_FALSE(startsMoving({0.001, 0.004, 0.003, 0.006}, o));
+  EXPECT_FALSE(startsMoving({0.001, 0.002, 0.003, 0.0045}, o));
+  // Off without still objects.
+  o.still_translation_m = 0.0;
+  EXPECT_FALSE(startsMoving({0.001, 0.002, 0.004, 0.006}, o));
+}
+
 TEST(ObjectRules, StillOnceEveryPoseOfTheWindowIsWithinTheBounds) {
   ObjectOptions o;
   o.still_translation_m = 0.01;
