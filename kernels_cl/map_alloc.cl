@@ -32,7 +32,8 @@
 #define EMF_VOL_ALLOCATED 1  // blocks with a slot
 #define EMF_VOL_DROPPED 2    // marked blocks that found no slot (this allocation)
 #define EMF_VOL_NEW 3        // blocks that got a slot (this allocation)
-#define EMF_VOL_REPORT 4     // report: list, allocated, dropped, new (4 ints from here)
+#define EMF_VOL_REPORT 4     // report: list, allocated, dropped, new, outside (5 ints from here)
+#define EMF_VOL_OUTSIDE 9    // pixels whose measured surface lies outside the grid (this frame)
 
 // Depths beyond this (metres) are ignored: keeps block coordinates far inside int range.
 #define EMF_MAX_MARK_DEPTH 1000.0f
@@ -41,12 +42,15 @@
 // keeps the one-pixel-per-item form scalar); the DDA steps all lanes together until the last
 // one is done. Per lane the operations and the cell sequence are those of one pixel:
 //   segment [max(d - truncation, 0), d + truncation] along the pixel's ray (z-depth), in block
-//   units; visit the blocks it crosses (3-D DDA), marking those inside the grid.
+//   units; visit the blocks it crosses (3-D DDA), marking those inside the grid. Pixels whose
+//   measured surface (depth d) lies outside the grid are counted (a moving background follows
+//   the camera only when it sees past the grid).
 // Launch ceil(width / 16) x height work items.
 __kernel void mark_blocks(__global const float* depth, const int width, const int height,
                           const float fx, const float fy, const float cx, const float cy,
                           const float4 r0, const float4 r1, const float4 r2, const float block_size,
-                          const float truncation, const int4 dims, __global uchar* needed) {
+                          const float truncation, const int4 dims, __global uchar* needed,
+                          __global int* volume_state) {
   const int x0 = get_global_id(0) * 16;
   const int y = get_global_id(1);
   if (x0 >= width || y >= height) return;
@@ -72,6 +76,19 @@ __kernel void mark_blocks(__global const float* depth, const int width, const in
   const float16 bx = (r0.x * ax1 + r0.y * ay1 + r0.z * az1 + r0.w) / block_size;
   const float16 by = (r1.x * ax1 + r1.y * ay1 + r1.z * az1 + r1.w) / block_size;
   const float16 bz = (r2.x * ax1 + r2.y * ay1 + r2.z * az1 + r2.w) / block_size;
+  {
+    const float16 sd = alive ? d : 0.0f;
+    const float16 qx = (r0.x * (rx * sd) + r0.y * (ry * sd) + r0.z * sd + r0.w) / block_size;
+    const float16 qy = (r1.x * (rx * sd) + r1.y * (ry * sd) + r1.z * sd + r1.w) / block_size;
+    const float16 qz = (r2.x * (rx * sd) + r2.y * (ry * sd) + r2.z * sd + r2.w) / block_size;
+    const int16 outside = alive & ((qx < 0.0f) | (qy < 0.0f) | (qz < 0.0f) | (qx >= (float)dims.x) |
+                                   (qy >= (float)dims.y) | (qz >= (float)dims.z));
+    int n = 0;
+#define EMF_MARK_OUTSIDE(l) n -= outside.s##l;
+    EMF_LANES16(EMF_MARK_OUTSIDE)
+#undef EMF_MARK_OUTSIDE
+    if (n > 0) atomic_add(&volume_state[EMF_VOL_OUTSIDE], n);
+  }
   const float16 dx = bx - ax, dy = by - ay, dz = bz - az;
   int16 cx_b = convert_int16(floor(ax)), cy_b = convert_int16(floor(ay));
   int16 cz_b = convert_int16(floor(az));
@@ -153,6 +170,8 @@ __kernel void finalize_allocation(__global int* pool_state, __global int* volume
   volume_state[EMF_VOL_REPORT + 1] = volume_state[EMF_VOL_ALLOCATED];
   volume_state[EMF_VOL_REPORT + 2] = volume_state[EMF_VOL_DROPPED];
   volume_state[EMF_VOL_REPORT + 3] = volume_state[EMF_VOL_NEW];
+  volume_state[EMF_VOL_REPORT + 4] = volume_state[EMF_VOL_OUTSIDE];
+  volume_state[EMF_VOL_OUTSIDE] = 0;
   volume_state[EMF_VOL_LIST] = 0;
   volume_state[EMF_VOL_DROPPED] = 0;
   volume_state[EMF_VOL_NEW] = 0;

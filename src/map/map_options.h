@@ -22,12 +22,15 @@ struct MapOptions {
   /// its viewing axis, as a fraction of the extent (0.5 = centre of one face, looking in).
   double initial_camera_face_offset = 0.5;
   /// The background follows the camera (docs/architecture.md#a-map-that-follows-the-camera):
-  /// its grid moves by whole blocks when the point the first camera saw at the grid centre
-  /// (initial_camera_face_offset times the extent ahead of the camera) is farther than
-  /// follow_trigger_m (at least one block) from the centre along a grid axis; the blocks that
-  /// leave the grid are meshed into the background mesh and return their slots to the pool.
+  /// once the camera sees past the grid (more than follow_outside_fraction of the last frame's
+  /// pixels measured a surface outside it), the grid moves by whole blocks while the point the
+  /// first camera saw at its centre (initial_camera_face_offset times the extent ahead of the
+  /// camera) is farther than follow_trigger_m (at least one block) from the centre along a
+  /// grid axis; the blocks that leave the grid are meshed into the background mesh and return
+  /// their slots to the pool. A scene that fits in the grid never moves it.
   bool follow_camera = true;
   double follow_trigger_m = 1.0;
+  double follow_outside_fraction = 0.02;
   /// Ray casting: nearest and farthest camera z rendered.
   double raycast_min_depth_m = 0.1;
   double raycast_max_depth_m = 8.0;
@@ -53,6 +56,8 @@ struct MapOptions {
               "the background moves with the camera, meshing and freeing what it leaves");
     b.real("follow_trigger_m", follow_trigger_m, 0.0, 100.0, "m",
            "the background moves when the view's focus is this far off its centre");
+    b.real("follow_outside_fraction", follow_outside_fraction, 0.0, 1.0, "",
+           "... and more than this share of the last frame saw surface outside it");
     b.real("raycast_min_depth_m", raycast_min_depth_m, 0.0, 100.0, "m",
            "nearest camera z rendered by ray casting");
     b.real("raycast_max_depth_m", raycast_max_depth_m, 0.01, 1000.0, "m",

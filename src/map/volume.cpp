@@ -13,9 +13,9 @@ namespace emf::map {
 
 namespace {
 
-constexpr int kIntegrateItems = 32;  // work items per block in integrate_blocks (16 voxels each)
-constexpr int kCountGroup = 512;     // work items per block in count_blocks (one per voxel)
-constexpr int kVolumeStateInts = 8;  // layout in kernels_cl/map_alloc.cl (EMF_VOL_*)
+constexpr int kIntegrateItems = 32;   // work items per block in integrate_blocks (16 voxels each)
+constexpr int kCountGroup = 512;      // work items per block in count_blocks (one per voxel)
+constexpr int kVolumeStateInts = 10;  // layout in kernels_cl/map_alloc.cl (EMF_VOL_*)
 constexpr int kVolumeReport = 4;
 
 int blocksFor(int voxels) { return (voxels + kBlockSize - 1) / kBlockSize; }
@@ -113,7 +113,7 @@ Volume::Volume(VoxelPool& pool, const VolumeSpec& spec, const Eigen::Isometry3d&
   integrate_ = ctx_.kernel("tsdf_integrate", "integrate_blocks");
   if (spec.has_counts) count_ = ctx_.kernel("tsdf_integrate", "count_blocks");
   createBuffers();
-  const int32_t state[kVolumeStateInts] = {0, 0, 0, 0, 0, 0, 0, 0};
+  const int32_t state[kVolumeStateInts] = {};
   state_ = ctx_.buffer(CL_MEM_READ_WRITE, sizeof(state), state);
 }
 
@@ -187,7 +187,7 @@ AllocationReport Volume::allocate(const IntegrationInput& frame) {
               static_cast<cl_float>(k.cx), static_cast<cl_float>(k.cy), row4(T_volume_camera, 0),
               row4(T_volume_camera, 1), row4(T_volume_camera, 2),
               static_cast<cl_float>(static_cast<float>(kBlockSize) * spec_.voxel_size_m),
-              static_cast<cl_float>(spec_.truncation_m), dims, needed_);
+              static_cast<cl_float>(spec_.truncation_m), dims, needed_, state_);
   // 16 pixels of a row per work item.
   cl::enqueue(ctx_.queue(), mark_, static_cast<size_t>((w + 15) / 16), static_cast<size_t>(h), 0, 4,
               16);
@@ -204,6 +204,7 @@ AllocationReport Volume::allocate(const IntegrationInput& frame) {
   last_report_.allocated_blocks = report_[1];
   last_report_.dropped_blocks = report_[2];
   last_report_.new_blocks = report_[3];
+  last_report_.outside_pixels = report_[4];
   pool_.recordAllocation(last_report_.dropped_blocks);
   return last_report_;
 }
@@ -248,7 +249,7 @@ void Volume::clear() {
   cl::setArgs(release_, index_, countIndex(), static_cast<cl_int>(spec_.has_counts), block_count,
               pool_.freeList(), pool_.state(), pool_.voxels());
   cl::enqueue(ctx_.queue(), release_, static_cast<size_t>(block_count), 0, 0, 256);
-  const int32_t zero_state[kVolumeStateInts] = {0, 0, 0, 0, 0, 0, 0, 0};
+  const int32_t zero_state[kVolumeStateInts] = {};
   ctx_.write(state_, zero_state, sizeof(zero_state));
   last_report_ = AllocationReport{};
 }

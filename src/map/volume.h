@@ -9,8 +9,8 @@
 //   count_index  (objects) int per grid block: pool slot of its (Fg, Bg) count block
 //   needed       uchar per grid block: blocks marked by the current frame
 //   block_list   int per grid block: the blocks to integrate this frame
-//   state        int[8]: allocation counters and the last report
-// Per frame: allocate() (mark + assign + finalize, then one 16-byte read of the report) and
+//   state        int[10]: allocation counters and the last report
+// Per frame: allocate() (mark + assign + finalize, then one 20-byte read of the report) and
 // integrate() (one work-group per listed block). Not thread-safe (one SLAM thread).
 #pragma once
 
@@ -76,6 +76,7 @@ struct AllocationReport {
   int allocated_blocks = 0;  // blocks of the volume with a slot, after this allocation
   int dropped_blocks = 0;    // blocks needed this frame that found no slot (pool exhausted)
   int new_blocks = 0;        // blocks that got a slot in this allocation
+  int outside_pixels = 0;    // valid pixels whose measured surface lies outside the grid
 };
 
 /// A host copy of a volume (tests, mesh extraction): its blocks gathered into a compact array.
@@ -175,7 +176,7 @@ class Volume {
   cl::MemHandle index_, count_index_, needed_, block_list_, state_;
   cl::KernelHandle mark_, assign_, finalize_, integrate_, count_, release_, reindex_, evict_;
   AllocationReport last_report_;
-  int32_t report_[4] = {0, 0, 0, 0};
+  int32_t report_[5] = {0, 0, 0, 0, 0};
 };
 
 }  // namespace emf::map

@@ -202,6 +202,11 @@ map::AllocationReport SlamSystem::integrateBackground(const map::IntegrationInpu
 }
 
 void SlamSystem::followCamera(FrameOutcome* out) {
+  // Only while the camera sees past the grid (the last allocation's count of pixels whose
+  // surface fell outside it): a scene that fits in the grid never moves it.
+  const double outside = static_cast<double>(background_->lastReport().outside_pixels) /
+                         (static_cast<double>(intrinsics_.width) * intrinsics_.height);
+  if (!(outside > config_.map.follow_outside_fraction)) return;
   const Eigen::Vector3i blocks = map::followShift(
       background_->spec(), background_->T_world_volume(), T_world_camera_, follow_);
   if (blocks.isZero()) return;

@@ -193,6 +193,45 @@ TEST_F(VolumeFollowTest, AShiftKeepsStayingVoxelsFreesLeavingBlocksAndMeshesWhat
   EXPECT_EQ(pool.stats().used_slots, bg.allocatedBlocks());
 }
 
+// The allocation counts the pixels whose measured surface lies outside the grid: none in the
+// 5.12 m grid, the far part of the room in a 1.28 m one (as the host counts them, to a few
+// pixels on the grid's faces).
+constexpr int kOutsideCountTolerancePx = 20;
+
+TEST_F(VolumeFollowTest, AllocationCountsPixelsThatSeePastTheGrid) {
+  map::MapOptions o = smallOptions();
+  map::VoxelPool pool(ctx(), o);
+  const Scene scene;
+  const core::Intrinsics k = testIntrinsics(160, 120);
+  const Eigen::Isometry3d T0 = Eigen::Isometry3d::Identity();
+  const cv::Mat depth = renderDepth(scene, k, T0);
+  for (int resolution : {256, 64}) {
+    o.background_resolution = resolution;
+    const map::VolumeSpec spec = map::VolumeSpec::background(o);
+    const Eigen::Isometry3d T_wv = map::backgroundVolumePose(o, spec, T0);
+    map::Volume bg(pool, spec, T_wv);
+    Frame f = makeFrame(depth, k, T0);
+    const map::AllocationReport rep = bg.allocate(f.input);
+    int expected = 0;
+    const Eigen::Vector3d ext = spec.extentM().cast<double>();
+    for (int y = 0; y < k.height; ++y) {
+      for (int x = 0; x < k.width; ++x) {
+        const float z = depth.at<float>(y, x);
+        if (!(z > 0.0f)) continue;
+        const Eigen::Vector3d p =
+            T_wv.inverse() * Eigen::Vector3d((x - k.cx) / k.fx * z, (y - k.cy) / k.fy * z, z);
+        expected += (p.array() < 0.0).any() || (p.array() >= ext.array()).any();
+      }
+    }
+    EXPECT_NEAR(rep.outside_pixels, expected, kOutsideCountTolerancePx) << resolution;
+    if (resolution == 256) {
+      EXPECT_EQ(expected, 0);
+    } else {
+      EXPECT_GT(expected, k.width * k.height / 4);
+    }
+  }
+}
+
 TEST_F(VolumeFollowTest, NoMoveLeavesTheVolumeAsItIsAndObjectsDoNotShift) {
   const map::MapOptions o = smallOptions();
   map::VoxelPool pool(ctx(), o);
