@@ -44,6 +44,35 @@ VolumeHostAccess::VolumeHostAccess(const Volume& volume, bool allow_mapping,
   view_.truncation_m = spec.truncation_m;
 }
 
+VolumeHostData copyBlocks(const VolumeHostAccess& access, const Volume::BlockFilter& keep) {
+  const VolumeHostView& v = access.view();
+  VolumeHostData out;
+  out.dims_blocks = v.dims_blocks;
+  out.voxel_size_m = v.voxel_size_m;
+  out.truncation_m = v.truncation_m;
+  out.T_world_volume = access.T_world_volume();
+  out.T_volume_initial = access.T_volume_initial();
+  const int n = v.dims_blocks.x() * v.dims_blocks.y() * v.dims_blocks.z();
+  out.index.assign(static_cast<size_t>(n), -1);
+  if (v.count_index) out.count_index.assign(static_cast<size_t>(n), -1);
+  const auto take = [&](int32_t slot) {
+    const int32_t compact = static_cast<int32_t>(out.voxels.size() / kBlockVoxels);
+    const Voxel* from = v.voxels + static_cast<int64_t>(slot) * kBlockVoxels;
+    out.voxels.insert(out.voxels.end(), from, from + kBlockVoxels);
+    out.pool_slots.push_back(-1);  // not known through a view
+    return compact;
+  };
+  for (int i = 0; i < n; ++i) {
+    const bool has = v.index[i] >= 0 || (v.count_index && v.count_index[i] >= 0);
+    if (!has || !keep(blockCoords(v.dims_blocks, i))) continue;
+    if (v.index[i] >= 0) out.index[static_cast<size_t>(i)] = take(v.index[i]);
+    if (v.count_index && v.count_index[i] >= 0) {
+      out.count_index[static_cast<size_t>(i)] = take(v.count_index[i]);
+    }
+  }
+  return out;
+}
+
 VolumeHostAccess::~VolumeHostAccess() = default;
 VolumeHostAccess::VolumeHostAccess(VolumeHostAccess&&) noexcept = default;
 

@@ -53,4 +53,9 @@ class VolumeHostAccess {
   std::unique_ptr<VolumeHostData> copy_;                          // when downloaded
 };
 
+/// A compact host copy of the blocks of `access` that `keep` accepts (the others read as
+/// unallocated): what a worker thread meshes after the volume has changed. On a CPU device a
+/// memcpy of those blocks from the mapped pool.
+VolumeHostData copyBlocks(const VolumeHostAccess& access, const Volume::BlockFilter& keep);
+
 }  // namespace emf::map

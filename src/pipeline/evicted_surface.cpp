@@ -1,6 +1,7 @@
 #include "pipeline/evicted_surface.h"
 
 #include "map/volume_follow.h"
+#include "map/volume_host_access.h"
 
 namespace emf::pipeline {
 
@@ -26,7 +27,8 @@ void EvictedSurface::rethrow() {
 
 void EvictedSurface::add(const map::Volume& volume, const Eigen::Vector3i& blocks) {
   auto job = std::make_unique<Job>();
-  job->blocks = volume.download(map::leavingMeshBlocks(blocks, volume.spec().dims_blocks));
+  const map::Volume::BlockFilter keep = map::leavingMeshBlocks(blocks, volume.spec().dims_blocks);
+  job->blocks = map::copyBlocks(map::VolumeHostAccess(volume, keep), keep);
   job->move = blocks;
   std::unique_lock<std::mutex> lock(mutex_);
   rethrow();
