@@ -31,7 +31,7 @@ FollowRule followRule(const MapOptions& options, const VolumeSpec& spec);
 
 /// The most a grid moves per frame along an axis, in blocks: a fast turn swings the focus by
 /// metres, and the grid then catches up over a few frames instead of meshing a thick slab on
-/// one (2 blocks a frame is 4.8 m/s at 1 cm voxels).
+/// one.
 constexpr int kMaxFollowStepBlocks = 2;
 
 /// The move, in whole blocks along the grid axes, that brings the focus of a camera at
