@@ -14,31 +14,51 @@
 // term. `sum` then holds the largest object p_fg.
 //
 // Host sequence per E-step: estep_likelihood16 once per volume (first = 1 for the first volume,
-// which initialises the running sum, the best likelihood and the residual), then
-// estep_normalize once per volume. Pixels without a valid vertex get q = 0 for every volume
-// and residual NaN; pixels no volume contains also get q = 0.
+// the background over the whole image, which initialises the running sum, the best likelihood
+// and the residual), then estep_normalize once per volume. Where no object's rectangle reaches
+// (`cover`), the background's q is 1 wherever its grid holds the point, whatever its SDF: unless
+// the residual is wanted there (cover.count < 0), the background's SDF is not sampled there (the
+// likelihood is set to 1 and the residual to NaN). An object's launches cover only the
+// pixel rectangle its grid projects to (outside it the likelihood is 0 exactly); the host keeps
+// its q at 0 outside that rectangle (estep_clear over the part a previous E-step wrote). Pixels
+// without a valid vertex get q = 0 for every volume and residual NaN; pixels no volume contains
+// also get q = 0.
 #include "map_common.clh"
+
+/// The object rectangles (x0, y0, width, height) the background pass must evaluate exactly:
+/// `count` of them (count < 0: the whole image). Matches em::EStep's host struct.
+#define EMF_ESTEP_COVER_RECTS 8
+typedef struct {
+  int4 rects[EMF_ESTEP_COVER_RECTS];
+  int count;
+  int pad[3];
+} EStepCover;
 
 /// The likelihood of one volume for 16 consecutive pixels per work item, in float16 lanes
 /// (explicit SIMD through emf_sample_sdf16 / emf_sample_pfg16, like track_accumulate: PoCL
 /// keeps a per-pixel kernel scalar). Per lane: the formula above, as em::associationLikelihood.
-/// Sixteen pixels none of which falls in the volume (most of the image for a small object) skip
-/// the sampling.
-__kernel void estep_likelihood16(__global const float4* vertex, const int count, const float4 r0,
-                                 const float4 r1, const float4 r2, __global const int* index,
-                                 __global const int* count_index, const int has_counts,
-                                 const int4 dims, const float4 claim_lo, const float4 claim_hi,
-                                 __global const short2* voxels, const float voxel_size,
-                                 const float truncation, const float sigma, const float alpha,
-                                 const float p_uniform, const float min_weight, const int pfg_mode,
-                                 const int first, __global float* likelihood, __global float* sum,
+/// Sixteen pixels none of which falls in the volume skip the sampling. The work items cover the
+/// rectangle `rect` (x0, y0, width, height) of an image `width` pixels wide: item (gx, gy) takes
+/// pixels x0 + 16 gx .. + 15 of row y0 + gy.
+__kernel void estep_likelihood16(__global const float4* vertex, const int width, const int4 rect,
+                                 const float4 r0, const float4 r1, const float4 r2,
+                                 __global const int* index, __global const int* count_index,
+                                 const int has_counts, const int4 dims, const float4 claim_lo,
+                                 const float4 claim_hi, __global const short2* voxels,
+                                 const float voxel_size, const float truncation, const float sigma,
+                                 const float alpha, const float p_uniform, const float min_weight,
+                                 const int pfg_mode, const int first, const EStepCover cover,
+                                 __global float* likelihood, __global float* sum,
                                  __global float* best, __global float* residual) {
-  const int base = get_global_id(0) * 16;
-  if (base >= count) return;
+  const int gx = get_global_id(0) * 16;  // first lane's column within the rectangle
+  const int gy = get_global_id(1);
+  if (gx >= rect.z || gy >= rect.w) return;
+  const int base = (rect.y + gy) * width + rect.x + gx;
+  const int lanes = rect.z - gx;  // lanes l < lanes are inside the rectangle
   float16 px, py, pz, pw;
 #define ESTEP_LOAD(l)                                      \
   {                                                        \
-    const float4 p = vertex[min(base + 0x##l, count - 1)]; \
+    const float4 p = vertex[base + min(0x##l, lanes - 1)]; \
     px.s##l = p.x;                                         \
     py.s##l = p.y;                                         \
     pz.s##l = p.z;                                         \
@@ -55,9 +75,18 @@ __kernel void estep_likelihood16(__global const float4* vertex, const int count,
   const int16 inside = (pw != 0.0f) & (x >= 0.0f) & (y >= 0.0f) & (z >= 0.0f) & (x < extent.x) &
                        (y < extent.y) & (z < extent.z) & (x >= claim_lo.x) & (y >= claim_lo.y) &
                        (z >= claim_lo.z) & (x < claim_hi.x) & (y < claim_hi.y) & (z < claim_hi.z);
+  // The first volume (background) outside every object rectangle: only "inside" matters.
+  int exact = !first || cover.count < 0;
+  const int col = rect.x + gx, row = rect.y + gy;
+  for (int r = 0; r < min(cover.count, EMF_ESTEP_COVER_RECTS) && !exact; ++r) {
+    const int4 c = cover.rects[r];
+    exact = row >= c.y && row < c.y + c.w && col < c.x + c.z && col + 16 > c.x;
+  }
   float16 lik = 0.0f;
   float16 abs_psi = NAN;
-  if (any(inside)) {
+  if (!exact) {
+    lik = select((float16)0.0f, (float16)1.0f, inside);
+  } else if (any(inside)) {
     float16 weight, gx, gy, gz;
     const float16 psi = emf_sample_sdf16(index, dims, voxels, voxel_size, truncation, x, y, z,
                                          &weight, &gx, &gy, &gz);
@@ -71,7 +100,7 @@ __kernel void estep_likelihood16(__global const float4* vertex, const int count,
     abs_psi = inside ? abs_psi_in : NAN;
   }
 #define ESTEP_STORE(l)                            \
-  if (base + 0x##l < count) {                     \
+  if (0x##l < lanes) {                            \
     const int u = base + 0x##l;                   \
     const float lk = lik.s##l, ap = abs_psi.s##l; \
     likelihood[u] = lk;                           \
@@ -98,16 +127,26 @@ __kernel void estep_likelihood16(__global const float4* vertex, const int count,
 #undef ESTEP_STORE
 }
 
-/// q_i(u) = likelihood_i(u) / sum(u) in place (0 where the sum is 0). pfg_mode: objects keep
-/// their p_fg, the background (is_background) gets its own value times 1 - max object p_fg.
-__kernel void estep_normalize(__global float* q, __global const float* sum, const int count,
-                              const int pfg_mode, const int is_background) {
-  const int u = get_global_id(0);
-  if (u >= count) return;
+/// q_i(u) = likelihood_i(u) / sum(u) in place (0 where the sum is 0) over the rectangle `rect`
+/// (x0, y0, width, height; one work item per pixel). pfg_mode: objects keep their p_fg, the
+/// background (is_background) gets its own value times 1 - max object p_fg.
+__kernel void estep_normalize(__global float* q, __global const float* sum, const int width,
+                              const int4 rect, const int pfg_mode, const int is_background) {
+  const int x = get_global_id(0), y = get_global_id(1);
+  if (x >= rect.z || y >= rect.w) return;
+  const int u = (rect.y + y) * width + rect.x + x;
   const float s = sum[u];
   if (pfg_mode) {
     if (is_background) q[u] = q[u] * (1.0f - s);
     return;
   }
   q[u] = s > 0.0f ? q[u] / s : 0.0f;
+}
+
+/// q = 0 over the rectangle `rect` (x0, y0, width, height): the part of an object's q that a
+/// previous E-step wrote outside this one's rectangle.
+__kernel void estep_clear(__global float* q, const int width, const int4 rect) {
+  const int x = get_global_id(0), y = get_global_id(1);
+  if (x >= rect.z || y >= rect.w) return;
+  q[(rect.y + y) * width + rect.x + x] = 0.0f;
 }

@@ -1,6 +1,9 @@
 #include "em/estep.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 
 #include "common/error.h"
 #include "map/map_math.h"
@@ -100,17 +103,89 @@ EStep::EStep(cl::Context& ctx, const EmOptions& options, int width, int height, 
   residual_ = ctx.buffer(CL_MEM_READ_WRITE, bytes);
   likelihood16_ = ctx.kernel("estep", "estep_likelihood16");
   normalize_ = ctx.kernel("estep", "estep_normalize");
+  clear_ = ctx.kernel("estep", "estep_clear");
+  written_.assign(q_.size(), cv::Rect(0, 0, width, height));
+  rects_.reserve(q_.size());
 }
 
-void EStep::compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes) {
+namespace {
+cl_int4 rectArg(const cv::Rect& r) { return {{r.x, r.y, r.width, r.height}}; }
+
+// The background pass's object rectangles (kernels_cl/estep.cl EStepCover).
+constexpr int kCoverRects = 8;
+struct EStepCover {
+  cl_int4 rects[kCoverRects];
+  cl_int count;
+  cl_int pad[3];
+};
+static_assert(sizeof(EStepCover) == 144, "layout of kernels_cl/estep.cl EStepCover");
+
+// At most kCoverRects rectangles covering `rects`: while there are more, the pair whose
+// bounding rectangle adds the least area is merged.
+EStepCover coverOf(std::vector<cv::Rect> rects) {
+  rects.erase(
+      std::remove_if(rects.begin(), rects.end(), [](const cv::Rect& r) { return r.empty(); }),
+      rects.end());
+  while (rects.size() > static_cast<size_t>(kCoverRects)) {
+    size_t best_a = 0, best_b = 1;
+    int64_t best_cost = std::numeric_limits<int64_t>::max();
+    for (size_t a = 0; a < rects.size(); ++a) {
+      for (size_t b = a + 1; b < rects.size(); ++b) {
+        const int64_t cost =
+            static_cast<int64_t>((rects[a] | rects[b]).area()) - rects[a].area() - rects[b].area();
+        if (cost < best_cost) {
+          best_cost = cost;
+          best_a = a;
+          best_b = b;
+        }
+      }
+    }
+    rects[best_a] |= rects[best_b];
+    rects.erase(rects.begin() + static_cast<std::ptrdiff_t>(best_b));
+  }
+  EStepCover cover{};
+  cover.count = static_cast<cl_int>(rects.size());
+  for (size_t i = 0; i < rects.size(); ++i) cover.rects[i] = rectArg(rects[i]);
+  return cover;
+}
+
+// Work-group shapes: 4 x 16 items of 16 pixels (whole rows of 640 and 320 pixels), and 32 x 4
+// items of one pixel.
+constexpr size_t kLikelihoodLocalX = 4, kLikelihoodLocalY = 16;
+constexpr size_t kPixelLocalX = 32, kPixelLocalY = 4;
+}  // namespace
+
+void EStep::compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes,
+                    bool residual_everywhere) {
   if (volumes.empty() || volumes.size() > q_.size()) {
     throw InvalidArgument("EStep::compute: " + std::to_string(volumes.size()) +
                           " volumes, capacity " + std::to_string(q_.size()));
   }
-  const int count = width_ * height_;
   const cl_int pfg_mode = options_.association == Association::kPfg ? 1 : 0;
+  const cv::Rect image(0, 0, width_, height_);
+  std::vector<cv::Rect>& rects = rects_;
+  rects.assign(volumes.size(), image);
+  for (size_t i = 1; i < volumes.size(); ++i) {
+    if (volumes[i].pixels) rects[i] = *volumes[i].pixels & image;
+  }
+  EStepCover cover{};
+  if (residual_everywhere) {
+    cover.count = -1;
+  } else {
+    cover = coverOf(std::vector<cv::Rect>(rects.begin() + 1, rects.end()));
+  }
   for (size_t i = 0; i < volumes.size(); ++i) {
     const EStepVolume& v = volumes[i];
+    const cv::Rect& rect = rects[i];
+    // Keep q_i at 0 outside this E-step's rectangle: clear what an earlier one wrote outside it.
+    const cv::Rect& old = written_[i];
+    if (!old.empty() && (old & rect) != old) {
+      cl::setArgs(clear_, q_[i].get(), width_, rectArg(old));
+      cl::enqueue(ctx_.queue(), clear_, static_cast<size_t>(old.width),
+                  static_cast<size_t>(old.height), 0, kPixelLocalX, kPixelLocalY);
+    }
+    written_[i] = rect;
+    if (rect.empty()) continue;
     const Eigen::Matrix<float, 3, 4> M = poseRows(v.T_volume_camera);
     cl_float4 rows[3];
     for (int r = 0; r < 3; ++r) {
@@ -121,20 +196,24 @@ void EStep::compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes) 
     const cl_int has_counts = v.count_index != nullptr ? 1 : 0;
     const cl_float4 claim_lo = {{v.claim.lo.x(), v.claim.lo.y(), v.claim.lo.z(), 0.0f}};
     const cl_float4 claim_hi = {{v.claim.hi.x(), v.claim.hi.y(), v.claim.hi.z(), 0.0f}};
-    // 16 pixels per work item.
-    cl::setArgs(likelihood16_, vertex_map, count, rows[0], rows[1], rows[2], v.view.index,
-                has_counts ? v.count_index : v.view.index, has_counts, dims, claim_lo, claim_hi,
-                v.view.voxels, v.view.voxel_size_m, v.view.truncation_m,
+    // 16 pixels of a row per work item.
+    cl::setArgs(likelihood16_, vertex_map, width_, rectArg(rect), rows[0], rows[1], rows[2],
+                v.view.index, has_counts ? v.count_index : v.view.index, has_counts, dims, claim_lo,
+                claim_hi, v.view.voxels, v.view.voxel_size_m, v.view.truncation_m,
                 static_cast<float>(options_.sigma_m), static_cast<float>(options_.alpha),
                 static_cast<float>(options_.p_uniform), static_cast<float>(options_.min_weight),
-                pfg_mode, static_cast<cl_int>(i == 0 ? 1 : 0), q_[i].get(), sum_.get(), best_.get(),
-                residual_.get());
-    cl::enqueue(ctx_.queue(), likelihood16_, static_cast<size_t>((count + 15) / 16), 0, 0, 64);
+                pfg_mode, static_cast<cl_int>(i == 0 ? 1 : 0), cover, q_[i].get(), sum_.get(),
+                best_.get(), residual_.get());
+    cl::enqueue(ctx_.queue(), likelihood16_, static_cast<size_t>((rect.width + 15) / 16),
+                static_cast<size_t>(rect.height), 0, kLikelihoodLocalX, kLikelihoodLocalY);
   }
   for (size_t i = 0; i < volumes.size(); ++i) {
-    cl::setArgs(normalize_, q_[i].get(), sum_.get(), count, pfg_mode,
+    const cv::Rect& rect = rects[i];
+    if (rect.empty()) continue;
+    cl::setArgs(normalize_, q_[i].get(), sum_.get(), width_, rectArg(rect), pfg_mode,
                 static_cast<cl_int>(i == 0 ? 1 : 0));
-    cl::enqueue(ctx_.queue(), normalize_, static_cast<size_t>(count), 0, 0, 64);
+    cl::enqueue(ctx_.queue(), normalize_, static_cast<size_t>(rect.width),
+                static_cast<size_t>(rect.height), 0, kPixelLocalX, kPixelLocalY);
   }
   count_ = static_cast<int>(volumes.size());
 }

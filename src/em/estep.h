@@ -4,11 +4,12 @@
 //
 // A volume is seen through its device view and the pose of the camera in its frame,
 // T_volume_camera. Buffers for up to `max_volumes` volumes are allocated at construction;
-// compute() allocates nothing. Not thread-safe (one SLAM thread).
+// compute() allocates no device memory. Not thread-safe (one SLAM thread).
 #pragma once
 
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <vector>
 
 #include "cl/context.h"
@@ -38,6 +39,11 @@ struct EStepVolume {
   cl_mem count_index = nullptr;  // objects: the count-block index grid; nullptr = p_fg 1
   Eigen::Isometry3d T_volume_camera = Eigen::Isometry3d::Identity();
   ClaimBox claim;
+  /// Objects: the pixels whose points can fall in the grid (and claim box), e.g. the
+  /// projection of the grid's box (track::volumeImageBounds); the likelihood is evaluated only
+  /// there and q is 0 elsewhere (an empty rectangle: nowhere). Unset = the whole image. The
+  /// background always takes the whole image.
+  std::optional<cv::Rect> pixels;
 };
 
 /// The same on the host, for the CPU reference.
@@ -67,12 +73,15 @@ class EStep {
 
   /// Computes q for `volumes` (at most max_volumes; [0] is the background) from the vertex map
   /// (float4 per pixel, camera frame, w = 0 invalid). Enqueues only; q(i) / residual() are
-  /// ready for kernels enqueued after it on the same queue.
-  void compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes);
+  /// ready for kernels enqueued after it on the same queue. Without `residual_everywhere` the
+  /// residual is computed only where an object's pixels reach (NaN elsewhere): the background's
+  /// SDF is then sampled only there, as q does not depend on it elsewhere.
+  void compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes,
+               bool residual_everywhere = true);
 
   /// q of volume i of the last compute() (float per pixel).
   const cl::MemHandle& q(int i) const { return q_.at(static_cast<size_t>(i)); }
-  /// |psi| of the best-associated volume per pixel (float, NaN = none).
+  /// |psi| of the best-associated volume per pixel (float, NaN = none; see compute()).
   const cl::MemHandle& residual() const { return residual_; }
   /// Number of volumes of the last compute().
   int volumeCount() const { return count_; }
@@ -88,7 +97,10 @@ class EStep {
   int width_, height_;
   std::vector<cl::MemHandle> q_;
   cl::MemHandle sum_, best_, residual_;
-  cl::KernelHandle likelihood16_, normalize_;
+  cl::KernelHandle likelihood16_, normalize_, clear_;
+  // Per q buffer: the rectangle outside which it holds 0 (the whole image until first written).
+  std::vector<cv::Rect> written_;
+  std::vector<cv::Rect> rects_;  // this compute()'s rectangles (kept between calls)
   int count_ = 0;
 };
 

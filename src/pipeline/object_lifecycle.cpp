@@ -119,12 +119,16 @@ std::vector<em::EStepVolume> ObjectLifecycle::eStepVolumes(
   volumes.push_back({deviceView(background_),
                      nullptr,
                      background_.T_world_volume().inverse() * T_world_camera,
+                     {},
                      {}});
   estep_ids_ = {0};
   for (size_t k = 0; k < objects_.size(); ++k) {
     TrackedObject& o = objects_[k];
     o.e_step_slot = static_cast<int>(volumes.size());
-    volumes.push_back({deviceView(*o.volume), o.volume->countIndex().get(), T_oc[k], {}});
+    volumes.push_back({deviceView(*o.volume), o.volume->countIndex().get(), T_oc[k], {}, {}});
+    const map::VolumeDeviceView& view = volumes.back().view;
+    Eigen::AlignedBox3d reach(Eigen::Vector3d::Zero(), view.dims_blocks.cast<double>() *
+                                                           map::kBlockSize * view.voxel_size_m);
     if (!o.claim_initial.isEmpty()) {
       // Growth shifts the grid by whole blocks: the region's corners in today's volume frame.
       const Eigen::Isometry3d& T_volume_initial = o.volume->T_volume_initial();
@@ -135,17 +139,23 @@ std::vector<em::EStepVolume> ObjectLifecycle::eStepVolumes(
       }
       volumes.back().claim.lo = claim.min().cast<float>();
       volumes.back().claim.hi = claim.max().cast<float>();
+      reach = reach.intersection(claim);
     }
+    // Only the pixels whose points can fall in the grid (and claim box) are evaluated.
+    const track::PixelRect r = track::boxImageBounds(reach, T_oc[k], intrinsics_);
+    volumes.back().pixels =
+        cv::Rect(r.x0, r.y0, std::max(0, r.x1 - r.x0), std::max(0, r.y1 - r.y0));
     estep_ids_.push_back(o.id);
   }
   return volumes;
 }
 
-void ObjectLifecycle::track(const std::vector<Eigen::Isometry3d>& T_oc_predicted) {
+void ObjectLifecycle::track(const std::vector<Eigen::Isometry3d>& T_oc_predicted,
+                            bool residual_everywhere) {
   const cl_mem vertex = vertexMap();
   {
     ScopedStage s(timer_, "estep");  // E-step again with the tracked camera pose
-    estep_.compute(vertex, eStepVolumes(T_world_camera_, T_oc_predicted));
+    estep_.compute(vertex, eStepVolumes(T_world_camera_, T_oc_predicted), residual_everywhere);
     ctx_.finish();
   }
   ScopedStage s(timer_, "track_objects");

@@ -107,8 +107,9 @@ FrameOutcome SlamSystem::process(const core::Frame& frame,
     const bool with_objects = !objects_->empty();
     if (with_objects) {
       ScopedStage s(timer_, "estep");
+      // The camera's weights: q_0 only, no residual.
       estep_.compute(objects_->vertexMap(),
-                     objects_->eStepVolumes(T_world_predicted, T_oc_predicted));
+                     objects_->eStepVolumes(T_world_predicted, T_oc_predicted), false);
       ctx_.finish();
     }
     {
@@ -131,7 +132,7 @@ FrameOutcome SlamSystem::process(const core::Frame& frame,
       T_world_camera_ = T_world_new;
     }
     objects_->setCamera(T_world_camera_, last_motion_);
-    if (with_objects && !out.lost) objects_->track(T_oc_predicted);
+    if (with_objects && !out.lost) objects_->track(T_oc_predicted, feedbackDue(frame));
     if (out.lost) objects_->markAllLost();
   }
   out.T_world_camera = T_world_camera_;
@@ -261,11 +262,15 @@ DetectorStats SlamSystem::detectorStats() const {
   return scheduler_ ? scheduler_->stats() : DetectorStats{};
 }
 
+bool SlamSystem::feedbackDue(const core::Frame& frame) const {
+  return scheduler_ && scheduler_->readsFeedback() &&
+         (scheduler_->async() || frame.index % config_.detector.every_n_frames == 0);
+}
+
 std::optional<DetectionBatch> SlamSystem::runDetector(const core::Frame& frame) {
   // Feedback for detectors that read the SLAM's state (motion): the background association and
   // the residual, on the frames the detector may run on.
-  const bool feedback = scheduler_->readsFeedback() &&
-                        (scheduler_->async() || frame.index % config_.detector.every_n_frames == 0);
+  const bool feedback = feedbackDue(frame);
   cv::Mat q0, residual;
   if (feedback) detectorFeedback(&q0, &residual);
   const std::vector<ObjectPose> poses = objects_->poses();
@@ -301,7 +306,6 @@ SlamSystem::Associations SlamSystem::associations() const {
   if (objects_->eStepIds().empty()) return a;
   a.ids = objects_->eStepIds();
   for (size_t i = 0; i < a.ids.size(); ++i) a.q.push_back(estep_.downloadQ(static_cast<int>(i)));
-  a.residual = estep_.downloadResidual();
   return a;
 }
 

@@ -102,7 +102,6 @@ class SlamSystem {
   struct Associations {
     std::vector<int> ids;    // volume ids: 0 = background, then objects
     std::vector<cv::Mat> q;  // CV_32F q per id
-    cv::Mat residual;        // CV_32F |psi| of the best volume (NaN none)
   };
   /// Empty when no E-step ran in the last frame (no objects and no detection).
   Associations associations() const;
@@ -137,6 +136,8 @@ class SlamSystem {
   const ObjectLifecycle& objectLifecycle() const { return *objects_; }
 
  private:
+  // Whether the detector reads the SLAM's feedback images on this frame.
+  bool feedbackDue(const core::Frame& frame) const;
   // Runs the detector schedule for this frame; the batch to apply now, if any.
   std::optional<DetectionBatch> runDetector(const core::Frame& frame);
   /// The detector's feedback images for this frame (detector_feedback.cpp): *q0 = how well the

@@ -252,14 +252,19 @@ size_t Tracker::kernelLocalMemoryBytes() const {
 
 PixelRect volumeImageBounds(const Eigen::Vector3d& extent_m,
                             const Eigen::Isometry3d& T_volume_camera, const core::Intrinsics& k) {
+  return boxImageBounds(Eigen::AlignedBox3d(Eigen::Vector3d::Zero(), extent_m), T_volume_camera, k);
+}
+
+PixelRect boxImageBounds(const Eigen::AlignedBox3d& box, const Eigen::Isometry3d& T_volume_camera,
+                         const core::Intrinsics& k) {
+  if (box.isEmpty()) return PixelRect{};
   const PixelRect whole{0, 0, k.width, k.height};
   const Eigen::Isometry3d T_camera_volume = T_volume_camera.inverse();
   double u_min = std::numeric_limits<double>::infinity(), u_max = -u_min;
   double v_min = u_min, v_max = -u_min;
   for (int c = 0; c < 8; ++c) {
-    const Eigen::Vector3d corner((c & 1) ? extent_m.x() : 0.0, (c & 2) ? extent_m.y() : 0.0,
-                                 (c & 4) ? extent_m.z() : 0.0);
-    const Eigen::Vector3d p = T_camera_volume * corner;
+    const Eigen::Vector3d p =
+        T_camera_volume * box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c));
     if (!(p.z() > 1e-3)) return whole;  // behind or at the camera: no bounded projection
     const double u = k.fx * p.x() / p.z() + k.cx;
     const double v = k.fy * p.y() / p.z() + k.cy;

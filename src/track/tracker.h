@@ -109,6 +109,10 @@ struct PixelRect {
 PixelRect volumeImageBounds(const Eigen::Vector3d& extent_m,
                             const Eigen::Isometry3d& T_volume_camera, const core::Intrinsics& k);
 
+/// The same for any box of the volume frame (e.g. the grid cut to a claim region).
+PixelRect boxImageBounds(const Eigen::AlignedBox3d& box, const Eigen::Isometry3d& T_volume_camera,
+                         const core::Intrinsics& k);
+
 /// Why a frame was declared lost (TrackResult::loss).
 enum class TrackLoss {
   kNone = 0,

@@ -6,9 +6,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 
 #include "map/map_math.h"
 #include "test_support.h"
+#include "track/tracker.h"
 #include "track_test_support.h"
 
 namespace emf::em {
@@ -156,7 +158,7 @@ TEST_P(EStepModes, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
   // 16-lane likelihood kernel (the first one initialises sum, best and residual).
   {
     const std::vector<cv::Mat> q_twice_ref = eStepReference({host[0], host[0]}, vertex, options);
-    const EStepVolume bg{d_bg.view, nullptr, host[0].T_volume_camera, {}};
+    const EStepVolume bg{d_bg.view, nullptr, host[0].T_volume_camera, {}, {}};
     estep.compute(d_vertex.get(), {bg, bg});
     for (int i = 0; i < 2; ++i) {
       EXPECT_LT(cv::norm(estep.downloadQ(i), q_twice_ref[static_cast<size_t>(i)], cv::NORM_INF),
@@ -164,9 +166,9 @@ TEST_P(EStepModes, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
           << "volume " << i;
     }
   }
-  estep.compute(d_vertex.get(), {{d_bg.view, nullptr, host[0].T_volume_camera, {}},
-                                 {d_1.view, c_1.get(), host[1].T_volume_camera, {}},
-                                 {d_2.view, c_2.get(), host[2].T_volume_camera, {}}});
+  estep.compute(d_vertex.get(), {{d_bg.view, nullptr, host[0].T_volume_camera, {}, {}},
+                                 {d_1.view, c_1.get(), host[1].T_volume_camera, {}, {}},
+                                 {d_2.view, c_2.get(), host[2].T_volume_camera, {}, {}}});
   ctx().finish();
   ASSERT_EQ(estep.volumeCount(), 3);
 
@@ -235,9 +237,9 @@ TEST_P(EStepModes, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
   std::vector<EStepHostVolume> host_half = host;
   host_half[1].claim = half;
   const std::vector<cv::Mat> q_half_ref = eStepReference(host_half, vertex, options);
-  estep.compute(d_vertex.get(), {{d_bg.view, nullptr, host[0].T_volume_camera, {}},
-                                 {d_1.view, c_1.get(), host[1].T_volume_camera, half},
-                                 {d_2.view, c_2.get(), host[2].T_volume_camera, {}}});
+  estep.compute(d_vertex.get(), {{d_bg.view, nullptr, host[0].T_volume_camera, {}, {}},
+                                 {d_1.view, c_1.get(), host[1].T_volume_camera, half, {}},
+                                 {d_2.view, c_2.get(), host[2].T_volume_camera, {}, {}}});
   for (int i = 0; i < 3; ++i) {
     EXPECT_LT(cv::norm(estep.downloadQ(i), q_half_ref[static_cast<size_t>(i)], cv::NORM_INF),
               kQTolerance)
@@ -263,6 +265,92 @@ TEST_P(EStepModes, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
   EXPECT_GT(cut, 50);
   EXPECT_EQ(cut_nonzero, 0);
   EXPECT_GT(kept, 50);
+
+  // Each object evaluated only over the pixels its grid projects to (track::volumeImageBounds):
+  // q and the residual are those of the whole image, to the bit.
+  const auto gridPixels = [&](const map::VolumeHostView& view, const Eigen::Isometry3d& T) {
+    const track::PixelRect r = track::volumeImageBounds(
+        view.dims_blocks.cast<double>() * map::kBlockSize * view.voxel_size_m, T, k);
+    return cv::Rect(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
+  };
+  const cv::Rect px_1 = gridPixels(obj1.view(), host[1].T_volume_camera);
+  const cv::Rect px_2 = gridPixels(obj2.view(), host[2].T_volume_camera);
+  ASSERT_LT(px_1.area() + px_2.area(), k.width * k.height);  // the rectangles do cut work
+  estep.compute(d_vertex.get(), {{d_bg.view, nullptr, host[0].T_volume_camera, {}, {}},
+                                 {d_1.view, c_1.get(), host[1].T_volume_camera, {}, {}},
+                                 {d_2.view, c_2.get(), host[2].T_volume_camera, {}, {}}});
+  std::vector<cv::Mat> q_whole;
+  for (int i = 0; i < 3; ++i) q_whole.push_back(estep.downloadQ(i));
+  const cv::Mat residual_whole = estep.downloadResidual();
+  estep.compute(d_vertex.get(), {{d_bg.view, nullptr, host[0].T_volume_camera, {}, {}},
+                                 {d_1.view, c_1.get(), host[1].T_volume_camera, {}, px_1},
+                                 {d_2.view, c_2.get(), host[2].T_volume_camera, {}, px_2}});
+  const auto sameBits = [](const cv::Mat& a, const cv::Mat& b) {
+    return a.size() == b.size() && a.type() == b.type() &&
+           std::memcmp(a.data, b.data, a.total() * a.elemSize()) == 0;
+  };
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_TRUE(sameBits(estep.downloadQ(i), q_whole[static_cast<size_t>(i)])) << "volume " << i;
+  }
+  EXPECT_TRUE(sameBits(estep.downloadResidual(), residual_whole));
+  // Without the residual everywhere the background's SDF is sampled only where an object's
+  // rectangle reaches: the same q, the same residual there, NaN elsewhere.
+  estep.compute(d_vertex.get(),
+                {{d_bg.view, nullptr, host[0].T_volume_camera, {}, {}},
+                 {d_1.view, c_1.get(), host[1].T_volume_camera, {}, px_1},
+                 {d_2.view, c_2.get(), host[2].T_volume_camera, {}, px_2}},
+                false);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_TRUE(sameBits(estep.downloadQ(i), q_whole[static_cast<size_t>(i)])) << "volume " << i;
+  }
+  {
+    const cv::Mat residual_objects = estep.downloadResidual();
+    int inside_same = 0, inside_other = 0, outside_nan = 0, outside_set = 0;
+    for (int v = 0; v < k.height; ++v) {
+      for (int u = 0; u < k.width; ++u) {
+        const float a = residual_objects.at<float>(v, u), b = residual_whole.at<float>(v, u);
+        // The background pass works on 16 pixels of a row: a group touching a rectangle is exact.
+        const int g0 = u / 16 * 16;
+        const cv::Rect group(g0, v, 16, 1);
+        if ((group & px_1).area() > 0 || (group & px_2).area() > 0) {
+          (std::memcmp(&a, &b, sizeof(float)) == 0 ? inside_same : inside_other)++;
+        } else if (!std::isnan(b)) {
+          (std::isnan(a) ? outside_nan : outside_set)++;
+        }
+      }
+    }
+    EXPECT_GT(inside_same, 0);
+    EXPECT_EQ(inside_other, 0);
+    EXPECT_GT(outside_nan, 1000);  // valid background pixels whose SDF was not sampled
+    EXPECT_EQ(outside_set, 0);
+  }
+  // More objects than the background pass takes rectangles (8): object 1 ten times, each copy
+  // seeing one strip of its rectangle; the rectangles are merged, q_0 is still exact.
+  {
+    EStep many(ctx(), options, k.width, k.height, 11);
+    std::vector<EStepVolume> strips = {{d_bg.view, nullptr, host[0].T_volume_camera, {}, {}}};
+    for (int j = 0; j < 10; ++j) {
+      const int x0 = px_1.x + px_1.width * j / 10, x1 = px_1.x + px_1.width * (j + 1) / 10;
+      strips.push_back({d_1.view,
+                        c_1.get(),
+                        host[1].T_volume_camera,
+                        {},
+                        cv::Rect(x0, px_1.y, x1 - x0, px_1.height)});
+    }
+    many.compute(d_vertex.get(), strips, false);
+    estep.compute(d_vertex.get(), {{d_bg.view, nullptr, host[0].T_volume_camera, {}, {}},
+                                   {d_1.view, c_1.get(), host[1].T_volume_camera, {}, px_1}});
+    EXPECT_TRUE(sameBits(many.downloadQ(0), estep.downloadQ(0)));
+  }
+  // An object seen nowhere (empty rectangle) after one seen: its q is 0 everywhere again, and
+  // the others are those of an E-step without it.
+  const std::vector<cv::Mat> q_without_1 = eStepReference({host[0], host[2]}, vertex, options);
+  estep.compute(d_vertex.get(), {{d_bg.view, nullptr, host[0].T_volume_camera, {}, {}},
+                                 {d_1.view, c_1.get(), host[1].T_volume_camera, {}, cv::Rect()},
+                                 {d_2.view, c_2.get(), host[2].T_volume_camera, {}, px_2}});
+  EXPECT_EQ(cv::countNonZero(estep.downloadQ(1)), 0);
+  EXPECT_LT(cv::norm(estep.downloadQ(0), q_without_1[0], cv::NORM_INF), kQTolerance);
+  EXPECT_LT(cv::norm(estep.downloadQ(2), q_without_1[1], cv::NORM_INF), kQTolerance);
 }
 
 INSTANTIATE_TEST_SUITE_P(Association, EStepModes, ::testing::Values("em", "pfg"));
