@@ -45,17 +45,20 @@
 //   units; visit the blocks it crosses (3-D DDA), marking those inside the grid. Pixels whose
 //   measured surface (depth d) lies outside the grid are counted (a moving background follows
 //   the camera only when it sees past the grid).
-// Launch ceil(width / 16) x height work items.
-__kernel void mark_blocks(__global const float* depth, const int width, const int height,
+// Only the pixels of `rect` (x0, y0, width, height; inside the image) are visited: the whole
+// image, or the rectangle an object's grid projects to (no other pixel's segment reaches it).
+// Launch ceil(rect width / 16) x rect height work items.
+__kernel void mark_blocks(__global const float* depth, const int width, const int4 rect,
                           const float fx, const float fy, const float cx, const float cy,
                           const float4 r0, const float4 r1, const float4 r2, const float block_size,
                           const float truncation, const int4 dims, __global uchar* needed,
                           __global int* volume_state) {
-  const int x0 = get_global_id(0) * 16;
-  const int y = get_global_id(1);
-  if (x0 >= width || y >= height) return;
+  const int x0 = rect.x + get_global_id(0) * 16;
+  const int y = rect.y + get_global_id(1);
+  const int x_end = rect.x + rect.z;
+  if (x0 >= x_end || y >= rect.y + rect.w) return;
   const int16 xs = (int16)(x0) + (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  const int16 in_row = xs < width;
+  const int16 in_row = xs < x_end;
   const int16 xr = in_row ? xs : x0;  // lanes past the row end read their row's first pixel
   float16 d;
 #define EMF_MARK_READ(l) d.s##l = depth[y * width + xr.s##l];

@@ -129,111 +129,179 @@ __kernel void raycast_bounds(__global const int* index, const int4 dims, const f
   }
 }
 
-__kernel void raycast_volume(__global const int* index, __global const int* count_index,
-                             const int has_counts, const int4 dims, __global const short2* voxels,
-                             const float voxel_size, const float truncation,
-                             const float step_fraction, const float4 r0, const float4 r1,
-                             const float4 r2, const int width, const int height, const float fx,
-                             const float fy, const float cx, const float cy, const float near_z,
-                             const float far_z, const int volume_id, const float depth_margin,
-                             const int tiles_x, __global const int* tile_min,
-                             __global const int* tile_max, __global float* depth_out,
-                             __global float4* normal_out, __global int* id_out) {
-  const int x = get_global_id(0);
+/// One volume's pass (see the top of this file) for 16 consecutive pixels of a row per work
+/// item (x0 = 16 * item: one ray tile), in float16 lanes: PoCL runs a one-pixel-per-item form,
+/// whose loop length depends on the data, one pixel at a time. The lanes march together until
+/// the last one is done; per lane the operations and their order are those of one pixel's ray
+/// (the one-pixel form gave the same images to the bit). Launch ceil(width / 16) x height
+/// work items.
+__kernel void raycast_volume16(__global const int* index, __global const int* count_index,
+                               const int has_counts, const int4 dims, __global const short2* voxels,
+                               const float voxel_size, const float truncation,
+                               const float step_fraction, const float4 r0, const float4 r1,
+                               const float4 r2, const int width, const int height, const float fx,
+                               const float fy, const float cx, const float cy, const float near_z,
+                               const float far_z, const int volume_id, const float depth_margin,
+                               const int tiles_x, __global const int* tile_min,
+                               __global const int* tile_max, __global float* depth_out,
+                               __global float4* normal_out, __global int* id_out) {
+  const int x0 = get_global_id(0) * 16;
   const int y = get_global_id(1);
-  if (x >= width || y >= height) return;
-  const int pixel = y * width + x;
-  const float3 ray = emf_pixel_ray(x, y, fx, fy, cx, cy);
+  if (x0 >= width || y >= height) return;
+  const int tile = (y / EMF_RAY_TILE) * tiles_x + x0 / EMF_RAY_TILE;
+  const float tile_lo = as_float(tile_min[tile]);
+  if (!(tile_lo < INFINITY)) return;  // no block of the volume covers this tile
+  const int16 xs = (int16)(x0) + (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  const int16 in_row = xs < width;
+  const int row = y * width;
+  float16 current;
+#define RC16_READ(l) current.s##l = in_row.s##l ? depth_out[row + xs.s##l] : NAN;
+  EMF_LANES16(RC16_READ)
+#undef RC16_READ
+  // emf_pixel_ray and emf_rotate per lane (ray.z = 1).
+  const float16 rx = (convert_float16(xs) - cx) / fx;
+  const float ry = ((float)y - cy) / fy;
   const float3 o = (float3)(r0.w, r1.w, r2.w);
-  const float3 d = emf_rotate(r0, r1, r2, ray);
-  const float current = depth_out[pixel];
-  const int tile = (y / EMF_RAY_TILE) * tiles_x + x / EMF_RAY_TILE;
-  float t0 = fmax(near_z, as_float(tile_min[tile]));
-  float t1 = fmin(far_z, as_float(tile_max[tile]));
-  if (emf_is_valid(current)) t1 = fmin(t1, current + depth_margin);
+  const float16 dx = r0.x * rx + r0.y * ry + r0.z * 1.0f;
+  const float16 dy = r1.x * rx + r1.y * ry + r1.z * 1.0f;
+  const float16 dz = r2.x * rx + r2.y * ry + r2.z * 1.0f;
+  float16 t0 = (float16)fmax(near_z, tile_lo);
+  float16 t1 = (float16)fmin(far_z, as_float(tile_max[tile]));
+  t1 = isnan(current) ? t1 : fmin(t1, current + depth_margin);
   const float block_m = (float)EMF_BLOCK * voxel_size;
-  if (!emf_clip_slab(o.x, d.x, (float)dims.x * block_m, &t0, &t1)) return;
-  if (!emf_clip_slab(o.y, d.y, (float)dims.y * block_m, &t0, &t1)) return;
-  if (!emf_clip_slab(o.z, d.z, (float)dims.z * block_m, &t0, &t1)) return;
-  if (!(t0 < t1)) return;
-
-  const float ray_len = sqrt(ray.x * ray.x + ray.y * ray.y + ray.z * ray.z);
-  const float voxel_t = voxel_size / ray_len;  // ray parameter per voxel edge of distance
-  const float inv_voxel = 1.0f / voxel_size;
-  const float psi_scale = truncation / EMF_TSDF_SCALE;  // metres per quantisation step
-  const float3 inv_d = (float3)(1.0f / d.x, 1.0f / d.y, 1.0f / d.z);
-  int4 block = (int4)(-1, -1, -1, 0);
-  int slot = -1;
-  bool prev_ok = false;
-  float prev_t = 0.0f;
-  float prev_psi = 0.0f;
-  float t = t0;
-  while (t < t1) {
-    const float3 p = o + d * t;
-    const float gx = p.x * inv_voxel, gy = p.y * inv_voxel, gz = p.z * inv_voxel;
-    if (gx < 0.0f || gy < 0.0f || gz < 0.0f) {  // on the box face by rounding
-      prev_ok = false;
-      t += voxel_t;
-      continue;
-    }
-    const int4 v = (int4)((int)gx, (int)gy, (int)gz, 0);  // floor: g >= 0
-    const int4 b = (int4)(v.x / EMF_BLOCK, v.y / EMF_BLOCK, v.z / EMF_BLOCK, 0);
-    if (b.x != block.x || b.y != block.y || b.z != block.z) {
-      block = b;
-      slot = emf_block_slot(index, dims, b);
-    }
-    if (slot < 0) {  // empty space: jump to the block exit
-      const float te = emf_block_exit(o, d, inv_d, b, block_m, t);
-      t = fmax(te, t) + 0.01f * voxel_t;
-      prev_ok = false;
-      continue;
-    }
-    const int4 l = v - b * EMF_BLOCK;
-    const short2 vox = voxels[slot * EMF_BLOCK_VOXELS + l.x + EMF_BLOCK * (l.y + EMF_BLOCK * l.z)];
-    if (vox.y <= 0) {  // unobserved voxel
-      prev_ok = false;
-      t += voxel_t;
-      continue;
-    }
-    const float psi = (float)vox.x * psi_scale;
-    if (prev_ok && prev_psi > 0.0f && psi <= 0.0f) {
-      // Surface between prev_t and t: interpolate the nearest-voxel values, then one Newton
-      // step along the ray on the trilinear SDF (its gradient gives d psi / dt).
-      float th = prev_t + (t - prev_t) * (prev_psi / (prev_psi - psi));
-      float w_unused = 0.0f;
-      float3 grad = (float3)(0.0f, 0.0f, 0.0f);
-      float3 ph = o + d * th;
-      const float sh =
-          emf_sample_sdf(index, dims, voxels, voxel_size, truncation, ph, &w_unused, &grad);
-      if (!emf_is_valid(sh)) return;
-      const float slope = grad.x * d.x + grad.y * d.y + grad.z * d.z;
-      if (slope < 0.0f) {
-        const float tn = th - sh / slope;
-        if (tn > prev_t - voxel_t && tn < t + voxel_t) {
-          float3 gn = (float3)(0.0f, 0.0f, 0.0f);
-          const float3 pn = o + d * tn;
-          const float sn =
-              emf_sample_sdf(index, dims, voxels, voxel_size, truncation, pn, &w_unused, &gn);
-          if (emf_is_valid(sn)) {
-            th = tn;
-            ph = pn;
-            grad = gn;
-          }
-        }
-      }
-      const float grad_len = sqrt(grad.x * grad.x + grad.y * grad.y + grad.z * grad.z);
-      if (!(grad_len > 0.0f)) return;
-      if (has_counts && emf_sample_pfg(count_index, dims, voxels, voxel_size, ph) <= 0.5f) return;
-      if (!(th < t1)) return;
-      const float3 n = emf_rotate_inverse(r0, r1, r2, grad / grad_len);
-      depth_out[pixel] = th;
-      normal_out[pixel] = (float4)(n, 0.0f);
-      id_out[pixel] = volume_id;
-      return;
-    }
-    prev_ok = true;
-    prev_psi = psi;
-    prev_t = t;
-    t += (psi > 0.0f ? fmax(voxel_size, step_fraction * psi) : voxel_size) / ray_len;
+  int16 active = in_row;
+  // emf_clip_slab per axis and lane.
+#define RC16_SLAB(oc, dc, hi)                        \
+  {                                                  \
+    const int16 flat = dc == 0.0f;                   \
+    active &= !flat | ((oc >= 0.0f) & (oc <= (hi))); \
+    const float16 ta = (0.0f - oc) / dc;             \
+    const float16 tb = ((hi)-oc) / dc;               \
+    t0 = flat ? t0 : fmax(t0, fmin(ta, tb));         \
+    t1 = flat ? t1 : fmin(t1, fmax(ta, tb));         \
   }
+  RC16_SLAB(o.x, dx, (float)dims.x * block_m)
+  RC16_SLAB(o.y, dy, (float)dims.y * block_m)
+  RC16_SLAB(o.z, dz, (float)dims.z * block_m)
+#undef RC16_SLAB
+  active &= t0 < t1;
+  if (!any(active)) return;
+
+  const float16 ray_len = sqrt(rx * rx + ry * ry + 1.0f * 1.0f);
+  const float16 voxel_t = voxel_size / ray_len;
+  const float inv_voxel = 1.0f / voxel_size;
+  const float psi_scale = truncation / EMF_TSDF_SCALE;
+  const float16 inv_dx = 1.0f / dx, inv_dy = 1.0f / dy, inv_dz = 1.0f / dz;
+  int16 bx_c = -1, by_c = -1, bz_c = -1;  // the block of the cached slot
+  int16 slot = -1;
+  int16 prev_ok = 0, found = 0;
+  float16 prev_t = 0.0f, prev_psi = 0.0f, psi_hit = 0.0f;
+  float16 t = t0;
+  while (true) {
+    active &= t < t1;
+    if (!any(active)) break;
+    const float16 px = o.x + dx * t, py = o.y + dy * t, pz = o.z + dz * t;
+    const float16 gx = px * inv_voxel, gy = py * inv_voxel, gz = pz * inv_voxel;
+    const int16 off_box = active & ((gx < 0.0f) | (gy < 0.0f) | (gz < 0.0f));
+    const int16 go = active & !off_box;
+    // floor: g >= 0 on the lanes that use it.
+    const int16 vx = convert_int16(go ? gx : 0.0f), vy = convert_int16(go ? gy : 0.0f),
+                vz = convert_int16(go ? gz : 0.0f);
+    const int16 bx = vx / EMF_BLOCK, by = vy / EMF_BLOCK, bz = vz / EMF_BLOCK;
+    const int16 changed = go & ((bx != bx_c) | (by != by_c) | (bz != bz_c));
+    bx_c = changed ? bx : bx_c;
+    by_c = changed ? by : by_c;
+    bz_c = changed ? bz : bz_c;
+#define RC16_SLOT(l)                                                               \
+  if (changed.s##l) {                                                              \
+    slot.s##l = emf_block_slot(index, dims, (int4)(bx.s##l, by.s##l, bz.s##l, 0)); \
+  }
+    EMF_LANES16(RC16_SLOT)
+#undef RC16_SLOT
+    const int16 empty = go & (slot < 0);
+    const int16 in_block = go & (slot >= 0);
+    int16 raw = 0;
+    const int16 addr = slot * EMF_BLOCK_VOXELS + (vx - bx * EMF_BLOCK) +
+                       EMF_BLOCK * ((vy - by * EMF_BLOCK) + EMF_BLOCK * (vz - bz * EMF_BLOCK));
+    __global const int* words = (__global const int*)voxels;
+#define RC16_VOXEL(l) \
+  if (in_block.s##l) raw.s##l = words[addr.s##l];
+    EMF_LANES16(RC16_VOXEL)
+#undef RC16_VOXEL
+    const int16 observed = in_block & (EMF_WORD_WEIGHT(raw) > 0);
+    const int16 unobserved = in_block & !observed;
+    const float16 psi = convert_float16(EMF_WORD_TSDF(raw)) * psi_scale;
+    const int16 crossing = observed & prev_ok & (prev_psi > 0.0f) & (psi <= 0.0f);
+    const int16 step = observed & !crossing;
+    // The block exit of empty lanes (emf_block_exit per lane).
+    float16 te = INFINITY;
+#define RC16_EXIT(dc, inv, b, oc)                                                    \
+  {                                                                                  \
+    const float16 c = (convert_float16(dc > 0.0f ? b + 1 : b) * block_m - oc) * inv; \
+    te = ((dc != 0.0f) & (c > t)) ? fmin(te, c) : te;                                \
+  }
+    RC16_EXIT(dx, inv_dx, bx, o.x)
+    RC16_EXIT(dy, inv_dy, by, o.y)
+    RC16_EXIT(dz, inv_dz, bz, o.z)
+#undef RC16_EXIT
+    const float16 t_step =
+        t + (psi > 0.0f ? fmax((float16)voxel_size, step_fraction * psi) : (float16)voxel_size) /
+                ray_len;
+    const float16 t_next = (off_box | unobserved)
+                               ? t + voxel_t
+                               : (empty ? fmax(te, t) + 0.01f * voxel_t : (step ? t_step : t));
+    prev_ok = (off_box | empty | unobserved) ? 0 : (step ? (int16)(-1) : prev_ok);
+    prev_psi = step ? psi : prev_psi;
+    prev_t = step ? t : prev_t;
+    psi_hit = crossing ? psi : psi_hit;
+    found |= crossing;
+    active &= !crossing;
+    t = active ? t_next : t;
+  }
+  if (!any(found)) return;
+  // The surface between prev_t and t of the lanes that found one: the secant point, then one
+  // Newton step along the ray on the trilinear SDF (its gradient gives d psi / dt).
+  float16 th = prev_t + (t - prev_t) * (prev_psi / (prev_psi - psi_hit));
+  float16 hx = o.x + dx * th, hy = o.y + dy * th, hz = o.z + dz * th;
+  float16 w_unused, gxh, gyh, gzh;
+  const float16 sh = emf_sample_sdf16(index, dims, voxels, voxel_size, truncation, hx, hy, hz,
+                                      &w_unused, &gxh, &gyh, &gzh);
+  int16 hit = found & !isnan(sh);
+  const float16 slope = gxh * dx + gyh * dy + gzh * dz;
+  const float16 tn = th - sh / slope;
+  const int16 newton = hit & (slope < 0.0f) & (tn > prev_t - voxel_t) & (tn < t + voxel_t);
+  if (any(newton)) {
+    const float16 nx = o.x + dx * tn, ny = o.y + dy * tn, nz = o.z + dz * tn;
+    float16 gxn, gyn, gzn;
+    const float16 sn = emf_sample_sdf16(index, dims, voxels, voxel_size, truncation, nx, ny, nz,
+                                        &w_unused, &gxn, &gyn, &gzn);
+    const int16 take = newton & !isnan(sn);
+    th = take ? tn : th;
+    hx = take ? nx : hx;
+    hy = take ? ny : hy;
+    hz = take ? nz : hz;
+    gxh = take ? gxn : gxh;
+    gyh = take ? gyn : gyh;
+    gzh = take ? gzn : gzh;
+  }
+  const float16 grad_len = sqrt(gxh * gxh + gyh * gyh + gzh * gzh);
+  hit &= grad_len > 0.0f;
+  if (has_counts && any(hit)) {
+    hit &= emf_sample_pfg16(count_index, dims, voxels, voxel_size, hx, hy, hz) > 0.5f;
+  }
+  hit &= th < t1;
+  const float16 ux = gxh / grad_len, uy = gyh / grad_len, uz = gzh / grad_len;
+  // emf_rotate_inverse per lane.
+  const float16 nx_c = r0.x * ux + r1.x * uy + r2.x * uz;
+  const float16 ny_c = r0.y * ux + r1.y * uy + r2.y * uz;
+  const float16 nz_c = r0.z * ux + r1.z * uy + r2.z * uz;
+#define RC16_WRITE(l)                                                    \
+  if (hit.s##l) {                                                        \
+    const int pixel = row + xs.s##l;                                     \
+    depth_out[pixel] = th.s##l;                                          \
+    normal_out[pixel] = (float4)(nx_c.s##l, ny_c.s##l, nz_c.s##l, 0.0f); \
+    id_out[pixel] = volume_id;                                           \
+  }
+  EMF_LANES16(RC16_WRITE)
+#undef RC16_WRITE
 }

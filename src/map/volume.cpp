@@ -182,15 +182,20 @@ AllocationReport Volume::allocate(const IntegrationInput& frame) {
   const PoseRows T_volume_camera = PoseRows::from(T_world_volume_.inverse() * frame.T_world_camera);
   const core::Intrinsics& k = frame.intrinsics;
   const cl_int4 dims = dimsBlocks();
-  const cl_int w = k.width, h = k.height;
-  cl::setArgs(mark_, *frame.depth, w, h, static_cast<cl_float>(k.fx), static_cast<cl_float>(k.fy),
-              static_cast<cl_float>(k.cx), static_cast<cl_float>(k.cy), row4(T_volume_camera, 0),
-              row4(T_volume_camera, 1), row4(T_volume_camera, 2),
+  const cv::Rect image(0, 0, k.width, k.height);
+  const cv::Rect rect = frame.pixels ? *frame.pixels & image : image;
+  const cl_int4 rect_arg = {{rect.x, rect.y, rect.width, rect.height}};
+  cl::setArgs(mark_, *frame.depth, static_cast<cl_int>(k.width), rect_arg,
+              static_cast<cl_float>(k.fx), static_cast<cl_float>(k.fy), static_cast<cl_float>(k.cx),
+              static_cast<cl_float>(k.cy), row4(T_volume_camera, 0), row4(T_volume_camera, 1),
+              row4(T_volume_camera, 2),
               static_cast<cl_float>(static_cast<float>(kBlockSize) * spec_.voxel_size_m),
               static_cast<cl_float>(spec_.truncation_m), dims, needed_, state_);
   // 16 pixels of a row per work item.
-  cl::enqueue(ctx_.queue(), mark_, static_cast<size_t>((w + 15) / 16), static_cast<size_t>(h), 0, 4,
-              16);
+  if (!rect.empty()) {
+    cl::enqueue(ctx_.queue(), mark_, static_cast<size_t>((rect.width + 15) / 16),
+                static_cast<size_t>(rect.height), 0, 4, 16);
+  }
 
   const cl_int block_count = spec_.blockCount();
   cl::setArgs(assign_, needed_, index_, countIndex(), static_cast<cl_int>(spec_.has_counts),

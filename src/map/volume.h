@@ -17,6 +17,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <functional>
+#include <opencv2/core.hpp>
+#include <optional>
 #include <vector>
 
 #include "cl/context.h"
@@ -68,6 +70,9 @@ struct IntegrationInput {
                                            // (NaN = occluded, no update), or nullptr
   core::Intrinsics intrinsics;             // of depth (and of weights / fg_mask)
   Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();
+  /// The pixels that may reach the grid (e.g. the projection of an object's grid box,
+  /// track::volumeImageBounds); allocation visits only these. Unset = the whole image.
+  std::optional<cv::Rect> pixels;
 };
 
 /// What one allocation did (counts of blocks of this volume).
@@ -77,6 +82,7 @@ struct AllocationReport {
   int dropped_blocks = 0;    // blocks needed this frame that found no slot (pool exhausted)
   int new_blocks = 0;        // blocks that got a slot in this allocation
   int outside_pixels = 0;    // valid pixels whose measured surface lies outside the grid
+                             // (of IntegrationInput::pixels when set)
 };
 
 /// A host copy of a volume (tests, mesh extraction): its blocks gathered into a compact array.

@@ -261,6 +261,12 @@ void ObjectLifecycle::integrate(const map::IntegrationInput& in) {
     }
     map::IntegrationInput oi = in;
     oi.weights = &estep_.q(o.e_step_slot);
+    // Allocation visits only the pixels whose rays cross the grid.
+    const map::VolumeSpec& spec = o.volume->spec();
+    const track::PixelRect px = track::volumeImageBounds(
+        spec.dims_blocks.cast<double>() * map::kBlockSize * spec.voxel_size_m,
+        o.volume->T_world_volume().inverse() * in.T_world_camera, in.intrinsics);
+    oi.pixels = cv::Rect(px.x0, px.y0, std::max(0, px.x1 - px.x0), std::max(0, px.y1 - px.y0));
     const auto fg = pending_fg_.find(o.id);
     if (fg != pending_fg_.end()) {
       ctx_.write(fg_mask_, fg->second.data, fg->second.total() * sizeof(float));

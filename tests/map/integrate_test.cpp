@@ -53,6 +53,56 @@ TEST_F(Integration, AllocationMarksTheTruncationBandAsTheReference) {
   EXPECT_EQ(again.listed_blocks, expected);
 }
 
+TEST_F(Integration, AllocationOverTheGridsImageRectangleMarksTheSameBlocks) {
+  // An object-sized grid (0.64 m) in front of the camera: allocation over the rectangle its box
+  // projects to marks exactly the blocks of a whole-image pass; a rectangle cut in half fewer.
+  const map::MapOptions o = smallOptions();
+  map::VoxelPool pool(ctx(), o);
+  const map::VolumeSpec spec = map::VolumeSpec::object(o, 64, 0.01f);
+  const Eigen::Isometry3d T_wc = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_wv = Eigen::Isometry3d::Identity();
+  T_wv.translation() = Eigen::Vector3d(-0.5, -0.2, 1.2);
+  const core::Intrinsics k = testIntrinsics(320, 240);
+  const Scene scene;
+  Frame f = makeFrame(renderDepth(scene, k, T_wc), k, T_wc);
+  // The grid box's projection: bounding rectangle of its corners, one pixel wider.
+  double u0 = 1e9, u1 = -1e9, v0 = 1e9, v1 = -1e9;
+  const Eigen::Vector3d extent = spec.extentM().cast<double>();
+  for (int c = 0; c < 8; ++c) {
+    const Eigen::Vector3d p = T_wc.inverse() * T_wv *
+                              Eigen::Vector3d((c & 1) ? extent.x() : 0, (c & 2) ? extent.y() : 0,
+                                              (c & 4) ? extent.z() : 0);
+    ASSERT_GT(p.z(), 0.1);
+    u0 = std::min(u0, k.fx * p.x() / p.z() + k.cx);
+    u1 = std::max(u1, k.fx * p.x() / p.z() + k.cx);
+    v0 = std::min(v0, k.fy * p.y() / p.z() + k.cy);
+    v1 = std::max(v1, k.fy * p.y() / p.z() + k.cy);
+  }
+  const cv::Rect image(0, 0, k.width, k.height);
+  const cv::Rect grid_px =
+      cv::Rect(
+          cv::Point(static_cast<int>(std::floor(u0)) - 1, static_cast<int>(std::floor(v0)) - 1),
+          cv::Point(static_cast<int>(std::ceil(u1)) + 2, static_cast<int>(std::ceil(v1)) + 2)) &
+      image;
+  ASSERT_LT(grid_px.area(), image.area() / 2);  // the rectangle leaves most pixels out
+
+  map::Volume whole(pool, spec, T_wv), bounded(pool, spec, T_wv), halved(pool, spec, T_wv);
+  const map::AllocationReport rw = whole.allocate(f.input);
+  Frame fb = makeFrame(f.depth_host, k, T_wc);
+  fb.input.pixels = grid_px;
+  const map::AllocationReport rb = bounded.allocate(fb.input);
+  fb.input.pixels = cv::Rect(grid_px.x, grid_px.y, grid_px.width / 2, grid_px.height);
+  const map::AllocationReport rh = halved.allocate(fb.input);
+  EXPECT_GT(rw.listed_blocks, 20);
+  EXPECT_EQ(rb.listed_blocks, rw.listed_blocks);
+  EXPECT_LT(rh.listed_blocks, rw.listed_blocks);
+  const map::VolumeHostData hw = whole.download(), hb = bounded.download();
+  ASSERT_EQ(hw.index.size(), hb.index.size());
+  for (size_t i = 0; i < hw.index.size(); ++i) {
+    ASSERT_EQ(hw.index[i] >= 0, hb.index[i] >= 0) << "block " << i;
+  }
+}
+
 TEST_F(Integration, PlainFusionMatchesReferenceOverSeveralViews) {
   const map::MapOptions o = smallOptions();
   map::VoxelPool pool(ctx(), o);
