@@ -20,7 +20,9 @@
 // the residual is wanted there (cover.count < 0), the background's SDF is not sampled there (the
 // likelihood is set to 1 and the residual to NaN). An object's launches cover only the
 // pixel rectangle its grid projects to (outside it the likelihood is 0 exactly); the host keeps
-// its q at 0 outside that rectangle (estep_clear over the part a previous E-step wrote). Pixels
+// its q at 0 outside that rectangle (estep_clear over the part a previous E-step wrote). When
+// the objects and their poses are those of the previous E-step (the frame's second E-step moves
+// only the background), their stored likelihoods are added with estep_accumulate instead. Pixels
 // without a valid vertex get q = 0 for every volume and residual NaN; pixels no volume contains
 // also get q = 0.
 #include "map_common.clh"
@@ -127,20 +129,33 @@ __kernel void estep_likelihood16(__global const float4* vertex, const int width,
 #undef ESTEP_STORE
 }
 
-/// q_i(u) = likelihood_i(u) / sum(u) in place (0 where the sum is 0) over the rectangle `rect`
+/// q_i(u) = likelihood_i(u) / sum(u) (0 where the sum is 0) over the rectangle `rect`
 /// (x0, y0, width, height; one work item per pixel). pfg_mode: objects keep their p_fg, the
 /// background (is_background) gets its own value times 1 - max object p_fg.
-__kernel void estep_normalize(__global float* q, __global const float* sum, const int width,
-                              const int4 rect, const int pfg_mode, const int is_background) {
+__kernel void estep_normalize(__global float* q, __global const float* likelihood,
+                              __global const float* sum, const int width, const int4 rect,
+                              const int pfg_mode, const int is_background) {
   const int x = get_global_id(0), y = get_global_id(1);
   if (x >= rect.z || y >= rect.w) return;
   const int u = (rect.y + y) * width + rect.x + x;
   const float s = sum[u];
+  const float lk = likelihood[u];
   if (pfg_mode) {
-    if (is_background) q[u] = q[u] * (1.0f - s);
+    q[u] = is_background ? lk * (1.0f - s) : lk;
     return;
   }
-  q[u] = s > 0.0f ? q[u] / s : 0.0f;
+  q[u] = s > 0.0f ? lk / s : 0.0f;
+}
+
+/// The running sum of an object whose likelihood is that of the previous E-step (same volume,
+/// same pose; only the background moved): sum += likelihood (pfg_mode: the max) over `rect`,
+/// as estep_likelihood16 does for a volume after the first.
+__kernel void estep_accumulate(__global const float* likelihood, __global float* sum,
+                               const int width, const int4 rect, const int pfg_mode) {
+  const int x = get_global_id(0), y = get_global_id(1);
+  if (x >= rect.z || y >= rect.w) return;
+  const int u = (rect.y + y) * width + rect.x + x;
+  sum[u] = pfg_mode ? fmax(sum[u], likelihood[u]) : sum[u] + likelihood[u];
 }
 
 /// q = 0 over the rectangle `rect` (x0, y0, width, height): the part of an object's q that a

@@ -112,9 +112,14 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
   const float16 x = r0.x * px + r0.y * py + r0.z * pz + r0.w;
   const float16 y = r1.x * px + r1.y * py + r1.z * pz + r1.w;
   const float16 z = r2.x * px + r2.y * py + r2.z * pz + r2.w;
-  float16 weight, gx, gy, gz;
-  const float16 r_raw = emf_sample_sdf16(index, dims, voxels, voxel_size, truncation, x, y, z,
-                                         &weight, &gx, &gy, &gz);
+  // Sixteen pixels none of which is an input (an object's pixels behind its grid, q = 0) skip
+  // the sampling: every term below is masked by `valid` there.
+  float16 weight = 0.0f, gx = 0.0f, gy = 0.0f, gz = 0.0f;
+  float16 r_raw = NAN;
+  if (any(input)) {
+    r_raw = emf_sample_sdf16(index, dims, voxels, voxel_size, truncation, x, y, z, &weight, &gx,
+                             &gy, &gz);
+  }
   const int16 valid = input & !isnan(r_raw);
   // Lanes without a valid sample continue with zeros and are masked out of every term.
   const float16 r = valid ? r_raw : 0.0f;

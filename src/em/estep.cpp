@@ -97,15 +97,21 @@ EStep::EStep(cl::Context& ctx, const EmOptions& options, int width, int height, 
                           std::to_string(max_volumes));
   }
   const size_t bytes = sizeof(float) * static_cast<size_t>(width) * height;
-  for (int i = 0; i < max_volumes; ++i) q_.push_back(ctx.buffer(CL_MEM_READ_WRITE, bytes));
+  for (int i = 0; i < max_volumes; ++i) {
+    q_.push_back(ctx.buffer(CL_MEM_READ_WRITE, bytes));
+    likelihood_.push_back(ctx.buffer(CL_MEM_READ_WRITE, bytes));
+  }
   sum_ = ctx.buffer(CL_MEM_READ_WRITE, bytes);
   best_ = ctx.buffer(CL_MEM_READ_WRITE, bytes);
   residual_ = ctx.buffer(CL_MEM_READ_WRITE, bytes);
   likelihood16_ = ctx.kernel("estep", "estep_likelihood16");
   normalize_ = ctx.kernel("estep", "estep_normalize");
   clear_ = ctx.kernel("estep", "estep_clear");
+  accumulate_ = ctx.kernel("estep", "estep_accumulate");
   written_.assign(q_.size(), cv::Rect(0, 0, width, height));
   rects_.reserve(q_.size());
+  keys_.reserve(q_.size());
+  last_objects_.reserve(q_.size());
 }
 
 namespace {
@@ -156,7 +162,7 @@ constexpr size_t kPixelLocalX = 32, kPixelLocalY = 4;
 }  // namespace
 
 void EStep::compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes,
-                    bool residual_everywhere) {
+                    bool residual_everywhere, bool same_objects) {
   if (volumes.empty() || volumes.size() > q_.size()) {
     throw InvalidArgument("EStep::compute: " + std::to_string(volumes.size()) +
                           " volumes, capacity " + std::to_string(q_.size()));
@@ -165,9 +171,16 @@ void EStep::compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes,
   const cv::Rect image(0, 0, width_, height_);
   std::vector<cv::Rect>& rects = rects_;
   rects.assign(volumes.size(), image);
+  keys_.clear();
   for (size_t i = 1; i < volumes.size(); ++i) {
-    if (volumes[i].pixels) rects[i] = *volumes[i].pixels & image;
+    const EStepVolume& v = volumes[i];
+    if (v.pixels) rects[i] = *v.pixels & image;
+    keys_.push_back({v.view.index, v.count_index, v.view.voxels, poseRows(v.T_volume_camera),
+                     v.claim.lo, v.claim.hi, rects[i]});
   }
+  // The objects' likelihoods of the last call still hold: add them instead of sampling again.
+  const bool reuse =
+      same_objects && !residual_everywhere && vertex_map == last_vertex_ && keys_ == last_objects_;
   EStepCover cover{};
   if (residual_everywhere) {
     cover.count = -1;
@@ -186,6 +199,12 @@ void EStep::compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes,
     }
     written_[i] = rect;
     if (rect.empty()) continue;
+    if (reuse && i > 0) {
+      cl::setArgs(accumulate_, likelihood_[i].get(), sum_.get(), width_, rectArg(rect), pfg_mode);
+      cl::enqueue(ctx_.queue(), accumulate_, static_cast<size_t>(rect.width),
+                  static_cast<size_t>(rect.height), 0, kPixelLocalX, kPixelLocalY);
+      continue;
+    }
     const Eigen::Matrix<float, 3, 4> M = poseRows(v.T_volume_camera);
     cl_float4 rows[3];
     for (int r = 0; r < 3; ++r) {
@@ -202,20 +221,23 @@ void EStep::compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes,
                 claim_hi, v.view.voxels, v.view.voxel_size_m, v.view.truncation_m,
                 static_cast<float>(options_.sigma_m), static_cast<float>(options_.alpha),
                 static_cast<float>(options_.p_uniform), static_cast<float>(options_.min_weight),
-                pfg_mode, static_cast<cl_int>(i == 0 ? 1 : 0), cover, q_[i].get(), sum_.get(),
-                best_.get(), residual_.get());
+                pfg_mode, static_cast<cl_int>(i == 0 ? 1 : 0), cover, likelihood_[i].get(),
+                sum_.get(), best_.get(), residual_.get());
     cl::enqueue(ctx_.queue(), likelihood16_, static_cast<size_t>((rect.width + 15) / 16),
                 static_cast<size_t>(rect.height), 0, kLikelihoodLocalX, kLikelihoodLocalY);
   }
   for (size_t i = 0; i < volumes.size(); ++i) {
     const cv::Rect& rect = rects[i];
     if (rect.empty()) continue;
-    cl::setArgs(normalize_, q_[i].get(), sum_.get(), width_, rectArg(rect), pfg_mode,
-                static_cast<cl_int>(i == 0 ? 1 : 0));
+    cl::setArgs(normalize_, q_[i].get(), likelihood_[i].get(), sum_.get(), width_, rectArg(rect),
+                pfg_mode, static_cast<cl_int>(i == 0 ? 1 : 0));
     cl::enqueue(ctx_.queue(), normalize_, static_cast<size_t>(rect.width),
                 static_cast<size_t>(rect.height), 0, kPixelLocalX, kPixelLocalY);
   }
   count_ = static_cast<int>(volumes.size());
+  last_objects_.swap(keys_);
+  last_vertex_ = vertex_map;
+  reused_ = reuse;
 }
 
 cv::Mat EStep::downloadQ(int i) const {

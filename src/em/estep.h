@@ -73,15 +73,23 @@ class EStep {
 
   /// Computes q for `volumes` (at most max_volumes; [0] is the background) from the vertex map
   /// (float4 per pixel, camera frame, w = 0 invalid). Enqueues only; q(i) / residual() are
-  /// ready for kernels enqueued after it on the same queue. Without `residual_everywhere` the
-  /// residual is computed only where an object's pixels reach (NaN elsewhere): the background's
-  /// SDF is then sampled only there, as q does not depend on it elsewhere.
+  /// ready for kernels enqueued after it on the same queue.
+  /// Without `residual_everywhere` the background's SDF is sampled only where an object's
+  /// pixels reach, as q does not depend on it elsewhere, and residual() is unspecified.
+  /// `same_objects`: the caller vouches that the object volumes have not changed since the last
+  /// compute() (no integration in between; the frame's second E-step, which moves only the
+  /// background). When their views, poses, claim boxes and rectangles and the vertex map are
+  /// also those of the last call (checked), their likelihoods are reused instead of sampled
+  /// again (not with `residual_everywhere`). q is the same either way, to the bit.
   void compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes,
-               bool residual_everywhere = true);
+               bool residual_everywhere = true, bool same_objects = false);
+  /// Whether the last compute() reused the objects' likelihoods (tests).
+  bool reusedObjects() const { return reused_; }
 
   /// q of volume i of the last compute() (float per pixel).
   const cl::MemHandle& q(int i) const { return q_.at(static_cast<size_t>(i)); }
-  /// |psi| of the best-associated volume per pixel (float, NaN = none; see compute()).
+  /// |psi| of the best-associated volume per pixel (float, NaN = none) after a compute() with
+  /// residual_everywhere.
   const cl::MemHandle& residual() const { return residual_; }
   /// Number of volumes of the last compute().
   int volumeCount() const { return count_; }
@@ -95,9 +103,24 @@ class EStep {
   cl::Context& ctx_;
   EmOptions options_;
   int width_, height_;
-  std::vector<cl::MemHandle> q_;
+  // What an object's likelihood pass depended on (compute()'s reuse test).
+  struct ObjectKey {
+    cl_mem index = nullptr, count_index = nullptr, voxels = nullptr;
+    Eigen::Matrix<float, 3, 4> rows;
+    Eigen::Vector3f claim_lo, claim_hi;
+    cv::Rect rect;
+    bool operator==(const ObjectKey& o) const {
+      return index == o.index && count_index == o.count_index && voxels == o.voxels &&
+             rows == o.rows && claim_lo == o.claim_lo && claim_hi == o.claim_hi && rect == o.rect;
+    }
+  };
+
+  std::vector<cl::MemHandle> q_, likelihood_;
   cl::MemHandle sum_, best_, residual_;
-  cl::KernelHandle likelihood16_, normalize_, clear_;
+  cl::KernelHandle likelihood16_, normalize_, clear_, accumulate_;
+  std::vector<ObjectKey> last_objects_, keys_;
+  cl_mem last_vertex_ = nullptr;
+  bool reused_ = false;
   // Per q buffer: the rectangle outside which it holds 0 (the whole image until first written).
   std::vector<cv::Rect> written_;
   std::vector<cv::Rect> rects_;  // this compute()'s rectangles (kept between calls)

@@ -154,8 +154,11 @@ void ObjectLifecycle::track(const std::vector<Eigen::Isometry3d>& T_oc_predicted
                             bool residual_everywhere) {
   const cl_mem vertex = vertexMap();
   {
-    ScopedStage s(timer_, "estep");  // E-step again with the tracked camera pose
-    estep_.compute(vertex, eStepVolumes(T_world_camera_, T_oc_predicted), residual_everywhere);
+    // E-step again with the tracked camera pose; the objects are those of the first one (same
+    // volumes, same predicted poses): their likelihoods are reused.
+    ScopedStage s(timer_, "estep");
+    estep_.compute(vertex, eStepVolumes(T_world_camera_, T_oc_predicted), residual_everywhere,
+                   true);
     ctx_.finish();
   }
   ScopedStage s(timer_, "track_objects");

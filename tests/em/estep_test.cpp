@@ -342,6 +342,41 @@ TEST_P(EStepModes, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
                                    {d_1.view, c_1.get(), host[1].T_volume_camera, {}, px_1}});
     EXPECT_TRUE(sameBits(many.downloadQ(0), estep.downloadQ(0)));
   }
+  // The frame's second E-step: the background moved, the objects did not. Their likelihoods
+  // are reused, with the same q as sampling them again; an object that moved is sampled again.
+  {
+    Eigen::Isometry3d T_bg_moved = host[0].T_volume_camera;
+    T_bg_moved.translate(Eigen::Vector3d(0.004, -0.002, 0.003));
+    const std::vector<EStepVolume> first = {
+        {d_bg.view, nullptr, host[0].T_volume_camera, {}, {}},
+        {d_1.view, c_1.get(), host[1].T_volume_camera, {}, px_1},
+        {d_2.view, c_2.get(), host[2].T_volume_camera, {}, px_2}};
+    std::vector<EStepVolume> second = first;
+    second[0].T_volume_camera = T_bg_moved;
+    estep.compute(d_vertex.get(), second, false, false);
+    std::vector<cv::Mat> q_sampled;
+    for (int i = 0; i < 3; ++i) q_sampled.push_back(estep.downloadQ(i));
+    EXPECT_FALSE(estep.reusedObjects());
+    estep.compute(d_vertex.get(), first, false, false);
+    estep.compute(d_vertex.get(), second, false, true);
+    EXPECT_TRUE(estep.reusedObjects());
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_TRUE(sameBits(estep.downloadQ(i), q_sampled[static_cast<size_t>(i)]))
+          << "volume " << i << " with the objects' likelihoods reused";
+    }
+    if (em_mode) {
+      EXPECT_FALSE(sameBits(estep.downloadQ(0), q_whole[0]));  // the background did move
+    }
+    // Object 2 moved too: nothing is reused, q is that of its new pose.
+    std::vector<EStepVolume> third = second;
+    third[2].T_volume_camera.translate(Eigen::Vector3d(0.01, 0.0, 0.0));
+    estep.compute(d_vertex.get(), third, false, false);
+    const cv::Mat q2_moved = estep.downloadQ(2);
+    estep.compute(d_vertex.get(), first, false, false);
+    estep.compute(d_vertex.get(), third, false, true);
+    EXPECT_FALSE(estep.reusedObjects());
+    EXPECT_TRUE(sameBits(estep.downloadQ(2), q2_moved));
+  }
   // An object seen nowhere (empty rectangle) after one seen: its q is 0 everywhere again, and
   // the others are those of an E-step without it.
   const std::vector<cv::Mat> q_without_1 = eStepReference({host[0], host[2]}, vertex, options);
