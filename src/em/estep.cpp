@@ -246,6 +246,19 @@ cv::Mat EStep::downloadQ(int i) const {
   return m;
 }
 
+cv::Mat EStep::downloadQRows(int i, int row0, int rows) const {
+  if (row0 < 0 || rows < 0 || row0 + rows > height_) {
+    throw InvalidArgument("EStep::downloadQRows: rows " + std::to_string(row0) + " + " +
+                          std::to_string(rows) + " outside the image's " + std::to_string(height_));
+  }
+  cv::Mat m(rows, width_, CV_32F);
+  if (rows > 0) {
+    ctx_.read(q_.at(static_cast<size_t>(i)), m.data, m.total() * sizeof(float),
+              static_cast<size_t>(row0) * static_cast<size_t>(width_) * sizeof(float));
+  }
+  return m;
+}
+
 cv::Mat EStep::downloadResidual() const {
   cv::Mat m(height_, width_, CV_32F);
   ctx_.read(residual_, m.data, m.total() * sizeof(float));

@@ -97,6 +97,8 @@ class EStep {
 
   /// Blocking downloads (outputs, tests): CV_32F images of the frame size.
   cv::Mat downloadQ(int i) const;
+  /// Rows row0 .. row0 + rows - 1 of q(i) (CV_32F, rows x width; throws for a bad range).
+  cv::Mat downloadQRows(int i, int row0, int rows) const;
   cv::Mat downloadResidual() const;
 
  private:

@@ -474,9 +474,7 @@ void ObjectLifecycle::checkVisibility(const cv::Mat& depth) {
     }
     // Mean association over the pixels where the object is in front (hidden ones say nothing).
     ids.setTo(-1, hidden_mask_);
-    cv::Mat q = estep_.downloadQ(o.e_step_slot);
-    if (scaled) cv::resize(q, q, ids.size(), 0, 0, cv::INTER_AREA);
-    const double mean_q = em::meanAssociation(q, ids, o.id);
+    const double mean_q = visibleMeanAssociation(o, ids);
     if (mean_q < opt.min_mean_association) {
       char reason[96];
       std::snprintf(reason, sizeof(reason), "mean association %.3f < %.3f", mean_q,
@@ -484,6 +482,31 @@ void ObjectLifecycle::checkVisibility(const cv::Mat& depth) {
       deleteObject(k, reason + at);
     }
   }
+}
+
+double ObjectLifecycle::visibleMeanAssociation(const TrackedObject& o, const cv::Mat& ids) const {
+  const cv::Size vis(settings_.visibility_k.width, settings_.visibility_k.height);
+  const int s = intrinsics_.width / vis.width;
+  if (s * vis.width != intrinsics_.width || s * vis.height != intrinsics_.height) {
+    // Not a whole-number scale: INTER_AREA weights depend on the position; the whole image.
+    cv::Mat q = estep_.downloadQ(o.e_step_slot);
+    cv::resize(q, q, vis, 0, 0, cv::INTER_AREA);
+    return em::meanAssociation(q, ids, o.id);
+  }
+  int r0 = ids.rows, r1 = 0;  // the rows where the object shows
+  for (int v = 0; v < ids.rows; ++v) {
+    const int* row = ids.ptr<int>(v);
+    if (std::find(row, row + ids.cols, o.id) != row + ids.cols) {
+      r0 = std::min(r0, v);
+      r1 = v + 1;
+    }
+  }
+  if (r0 >= r1) return 0.0;  // as em::meanAssociation without a pixel
+  // Rows r0 .. r1 of the visibility image average rows s r0 .. s r1 of the frame's q (a
+  // whole-number INTER_AREA: each output pixel from its own s x s block, as in the whole image).
+  cv::Mat q = estep_.downloadQRows(o.e_step_slot, r0 * s, (r1 - r0) * s);
+  if (s > 1) cv::resize(q, q, cv::Size(vis.width, r1 - r0), 0, 0, cv::INTER_AREA);
+  return em::meanAssociation(q, ids.rowRange(r0, r1), o.id);
 }
 
 void ObjectLifecycle::confirmIfDue(TrackedObject& o) {

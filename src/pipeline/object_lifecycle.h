@@ -231,6 +231,9 @@ class ObjectLifecycle {
   bool createObject(const core::Detection& d, const cv::Mat& vertex);
   void deleteByExistence();
   void checkVisibility(const cv::Mat& depth);
+  // Mean q of object `o` over the pixels where `ids` (visibility size) shows it; downloads only
+  // the rows of q that hold them when the visibility size divides the frame's.
+  double visibleMeanAssociation(const TrackedObject& o, const cv::Mat& ids) const;
   // Retires active object i for `reason`: dormant with objects.reidentify_frames, else deleted;
   // a tentative one is dropped unreported.
   void deleteObject(size_t i, const std::string& reason);

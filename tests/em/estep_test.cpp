@@ -377,6 +377,15 @@ TEST_P(EStepModes, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
     EXPECT_FALSE(estep.reusedObjects());
     EXPECT_TRUE(sameBits(estep.downloadQ(2), q2_moved));
   }
+  // A band of rows of q, as the visibility rule downloads it.
+  {
+    const cv::Mat whole = estep.downloadQ(1);
+    const cv::Mat band = estep.downloadQRows(1, 37, 20);
+    EXPECT_TRUE(sameBits(band, whole.rowRange(37, 57).clone()));
+    EXPECT_EQ(estep.downloadQRows(1, k.height, 0).rows, 0);
+    EXPECT_THROW(estep.downloadQRows(1, k.height - 5, 6), InvalidArgument);
+    EXPECT_THROW(estep.downloadQRows(1, -1, 2), InvalidArgument);
+  }
   // An object seen nowhere (empty rectangle) after one seen: its q is 0 everywhere again, and
   // the others are those of an E-step without it.
   const std::vector<cv::Mat> q_without_1 = eStepReference({host[0], host[2]}, vertex, options);
