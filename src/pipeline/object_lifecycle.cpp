@@ -142,9 +142,7 @@ std::vector<em::EStepVolume> ObjectLifecycle::eStepVolumes(
       reach = reach.intersection(claim);
     }
     // Only the pixels whose points can fall in the grid (and claim box) are evaluated.
-    const track::PixelRect r = track::boxImageBounds(reach, T_oc[k], intrinsics_);
-    volumes.back().pixels =
-        cv::Rect(r.x0, r.y0, std::max(0, r.x1 - r.x0), std::max(0, r.y1 - r.y0));
+    volumes.back().pixels = track::boxImageBounds(reach, T_oc[k], intrinsics_).toCv();
     estep_ids_.push_back(o.id);
   }
   return volumes;
@@ -266,10 +264,10 @@ void ObjectLifecycle::integrate(const map::IntegrationInput& in) {
     oi.weights = &estep_.q(o.e_step_slot);
     // Allocation visits only the pixels whose rays cross the grid.
     const map::VolumeSpec& spec = o.volume->spec();
-    const track::PixelRect px = track::volumeImageBounds(
-        spec.dims_blocks.cast<double>() * map::kBlockSize * spec.voxel_size_m,
-        o.volume->T_world_volume().inverse() * in.T_world_camera, in.intrinsics);
-    oi.pixels = cv::Rect(px.x0, px.y0, std::max(0, px.x1 - px.x0), std::max(0, px.y1 - px.y0));
+    oi.pixels = track::volumeImageBounds(
+                    spec.dims_blocks.cast<double>() * map::kBlockSize * spec.voxel_size_m,
+                    o.volume->T_world_volume().inverse() * in.T_world_camera, in.intrinsics)
+                    .toCv();
     const auto fg = pending_fg_.find(o.id);
     if (fg != pending_fg_.end()) {
       ctx_.write(fg_mask_, fg->second.data, fg->second.total() * sizeof(float));

@@ -159,8 +159,8 @@ class ObjectLifecycle {
   /// The camera's pose and motion (T_prev_curr) of this frame, once it is tracked (or kept).
   void setCamera(const Eigen::Isometry3d& T_world_camera, const Eigen::Isometry3d& last_motion);
   /// E-step again at the tracked camera pose, then each object tracked from its prediction.
-  /// `residual_everywhere`: the E-step's residual is wanted over the whole image (the
-  /// detector's feedback of this frame), not only where objects reach.
+  /// `residual_everywhere`: the E-step's residual is wanted (the detector's feedback of this
+  /// frame reads it; em::EStep::compute).
   void track(const std::vector<Eigen::Isometry3d>& T_oc_predicted, bool residual_everywhere);
   /// The camera was lost: every object is lost this frame.
   void markAllLost();

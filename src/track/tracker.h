@@ -99,6 +99,9 @@ struct PixelRect {
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
   bool empty() const { return x1 <= x0 || y1 <= y0; }
   int area() const { return empty() ? 0 : (x1 - x0) * (y1 - y0); }
+  cv::Rect toCv() const {
+    return empty() ? cv::Rect(x0, y0, 0, 0) : cv::Rect(x0, y0, x1 - x0, y1 - y0);
+  }
 };
 
 /// The pixels whose back-projected point can lie inside a volume's box [0, extent_m] (volume

@@ -269,9 +269,9 @@ TEST_P(EStepModes, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
   // Each object evaluated only over the pixels its grid projects to (track::volumeImageBounds):
   // q and the residual are those of the whole image, to the bit.
   const auto gridPixels = [&](const map::VolumeHostView& view, const Eigen::Isometry3d& T) {
-    const track::PixelRect r = track::volumeImageBounds(
-        view.dims_blocks.cast<double>() * map::kBlockSize * view.voxel_size_m, T, k);
-    return cv::Rect(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
+    return track::volumeImageBounds(
+               view.dims_blocks.cast<double>() * map::kBlockSize * view.voxel_size_m, T, k)
+        .toCv();
   };
   const cv::Rect px_1 = gridPixels(obj1.view(), host[1].T_volume_camera);
   const cv::Rect px_2 = gridPixels(obj2.view(), host[2].T_volume_camera);
