@@ -80,6 +80,7 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
   // shared[t * TRACK_ITEMS + k]. 35 x 16 float8 = 17.5 KiB of local memory (OpenCL 1.2
   // guarantees 32 KiB; unfolded float16, 35 KiB, did not fit there).
   __local float8 shared[TRACK_TERMS * TRACK_ITEMS];
+  (void)height;  // the host's sampled-grid bounds (sv1) already keep rows inside the image
   const int lid = get_local_id(0) + TRACK_LX * get_local_id(1);
   // The launch covers the sampled grid cells [su0, su1) x [sv0, sv1) (within the
   // ceil(width / stride) x ceil(height / stride) grid; the host's region of interest).

@@ -171,6 +171,13 @@ TEST_F(ClRuntime, EveryEmbeddedKernelBuilds) {
   }
 }
 
+TEST_F(ClRuntime, EveryEmbeddedKernelBuildsWithWarningsAsErrors) {
+  // The OpenCL build option -Werror: a warning of the device compiler fails the build.
+  for (const KernelSource* k : embeddedKernels()) {
+    EXPECT_NO_THROW(ctx().program(k->name, "-Werror")) << k->name;
+  }
+}
+
 TEST_F(ClRuntime, IncludesAreInlinedAtEmbedTime) {
   const KernelSource* k = findEmbeddedKernel("image_scale");
   ASSERT_NE(k, nullptr);
