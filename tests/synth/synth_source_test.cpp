@@ -142,6 +142,48 @@ TEST(SynthSource, FramesCarryTimestampsGroundTruthAndDetections) {
   EXPECT_FALSE(src.next(f));
 }
 
+/// Checks that every pixel labelled k on the given frames, back-projected with its exact depth
+/// and the ground-truth poses, lies on object k's surface (in the object frame); returns the
+/// number of pixels checked.
+int checkDepthIdsAndPoses(const SynthSource& src, const std::vector<int64_t>& frames,
+                          const std::string& what) {
+  const core::Intrinsics K = src.intrinsics();
+  int checked = 0;
+  for (int64_t index : frames) {
+    core::Frame f;
+    src.renderFrame(index, &f);
+    for (const auto& obj : src.scene().objects) {
+      const Eigen::Isometry3d T_object_camera =
+          f.T_world_object_gt.at(obj.id).inverse() * *f.T_world_camera_gt;
+      double worst = 0.0;
+      int worst_u = -1, worst_v = -1;
+      for (int v = 0; v < K.height; ++v) {
+        for (int u = 0; u < K.width; ++u) {
+          if (f.instance_ids.at<uint16_t>(v, u) != obj.id) continue;
+          const double z = f.depth.at<float>(v, u);
+          const Eigen::Vector3d p_c((u - K.cx) / K.fx * z, (v - K.cy) / K.fy * z, z);
+          const Eigen::Vector3d p_o = T_object_camera * p_c;
+          double best = 1e9;
+          for (const auto& part : obj.parts) {
+            const Eigen::Vector3d q = part.T_parent_primitive.inverse() * p_o;
+            best = std::min(best, std::fabs(signedDistance(part.geometry, {q.x(), q.y(), q.z()})));
+          }
+          if (best > worst) {
+            worst = best;
+            worst_u = u;
+            worst_v = v;
+          }
+          ++checked;
+        }
+      }
+      EXPECT_LT(worst, kSurfaceToleranceM)
+          << what << " frame " << index << " object " << obj.id << " (" << obj.class_name << ") px "
+          << worst_u << "," << worst_v;
+    }
+  }
+  return checked;
+}
+
 // Every pixel labelled k, back-projected with its exact depth and the ground-truth poses, lies
 // on object k's surface (in the object frame), for every dynamic preset.
 TEST(SynthSource, DepthIdsAndPosesAreConsistent) {
@@ -151,35 +193,22 @@ TEST(SynthSource, DepthIdsAndPosesAreConsistent) {
     o.width = 160;
     o.height = 120;
     o.noise = false;
-    SynthSource src(o);
-    const core::Intrinsics K = src.intrinsics();
-    int checked = 0;
-    for (int64_t index : {int64_t{100}, int64_t{200}, int64_t{250}}) {
-      core::Frame f;
-      src.renderFrame(index, &f);
-      for (const auto& obj : src.scene().objects) {
-        const Eigen::Isometry3d T_object_camera =
-            f.T_world_object_gt.at(obj.id).inverse() * *f.T_world_camera_gt;
-        for (int v = 0; v < K.height; ++v) {
-          for (int u = 0; u < K.width; ++u) {
-            if (f.instance_ids.at<uint16_t>(v, u) != obj.id) continue;
-            const double z = f.depth.at<float>(v, u);
-            const Eigen::Vector3d p_c((u - K.cx) / K.fx * z, (v - K.cy) / K.fy * z, z);
-            const Eigen::Vector3d p_o = T_object_camera * p_c;
-            double best = 1e9;
-            for (const auto& part : obj.parts) {
-              const Eigen::Vector3d q = part.T_parent_primitive.inverse() * p_o;
-              best =
-                  std::min(best, std::fabs(signedDistance(part.geometry, {q.x(), q.y(), q.z()})));
-            }
-            EXPECT_LT(best, kSurfaceToleranceM)
-                << preset << " frame " << index << " px " << u << "," << v;
-            ++checked;
-          }
-        }
-      }
-    }
-    EXPECT_GT(checked, 300) << preset;
+    EXPECT_GT(checkDepthIdsAndPoses(SynthSource(o), {100, 200, 250}, preset), 300) << preset;
+  }
+}
+
+// The same for generated scenes: every motion family (moving parts, pivots, pushes) renders
+// where its ground truth says.
+TEST(SynthSource, GeneratedScenesDepthIdsAndPosesAreConsistent) {
+  for (uint64_t seed = 1; seed <= 16; ++seed) {
+    SynthOptions o =
+        synthOptionsFromQuery("random", {{"seed", std::to_string(seed)}}, core::SourceOptions{});
+    o.width = 160;
+    o.height = 120;
+    o.noise = false;
+    EXPECT_GT(
+        checkDepthIdsAndPoses(SynthSource(o), {100, 250, 420, 550}, "seed " + std::to_string(seed)),
+        300);
   }
 }
 
