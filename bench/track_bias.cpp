@@ -227,12 +227,8 @@ void placeObjectVolume(const std::vector<emf::core::Frame>& frames, const emf::c
   }
   const emf::em::VolumePlacement placement = emf::em::placeObject(points, config.objects);
   if (placement.extent_m <= 0.0) throw emf::IoError("--object: fewer than 10 object points");
-  *spec = emf::map::VolumeSpec::object(config.map, placement.resolution,
-                                       static_cast<float>(placement.voxel_size_m));
-  spec->free_space_full_weight = config.objects.free_space_full_weight;
   const double centre_depth_m = (first->T_world_camera_gt->inverse() * placement.centre_world).z();
-  spec->truncation_m = static_cast<float>(emf::em::objectTruncation(
-      config.objects, config.map.truncation_voxels, placement.voxel_size_m, centre_depth_m / k.fx));
+  *spec = emf::em::objectVolumeSpec(config.map, config.objects, placement, centre_depth_m / k.fx);
   *T_world_volume = Eigen::Isometry3d::Identity();
   T_world_volume->translation() =
       placement.centre_world - Eigen::Vector3d::Constant(spec->extentM().x() / 2.0);

@@ -7,7 +7,11 @@
 // is projected to its nearest pixel u; with d = D(u) - z (projective distance along the camera
 // axis):
 //   d < -truncation                skipped (occluded / behind the surface)
-//   -truncation <= d <= truncation band: observation tsdf = d / truncation with weight q(u)
+//   -truncation <= d <= truncation band: observation tsdf = d / truncation with weight q(u),
+//                                  with behind_dropoff x (truncation + d) / (truncation - voxel)
+//                                  for d < -voxel (Voxblox's drop-off: a projective distance
+//                                  behind the surface overestimates the true one, most of all
+//                                  near edges seen from the side)
 //   d > truncation                 free space: tsdf = 1 with weight q(u), or 1 when
 //                                  free_space_full_weight (the authors' code)
 //   psi <- (W psi + w tsdf) / (W + w),  W <- min(W_max, W + w)   (skipped when w <= 0)
@@ -64,7 +68,7 @@ __kernel __attribute__((reqd_work_group_size(EMF_INTEGRATE_ITEMS, 1, 1))) void i
     const int has_weights, const int width, const int height, const float fx, const float fy,
     const float cx, const float cy, const float4 r0, const float4 r1, const float4 r2,
     const float voxel_size, const float truncation, const float inv_truncation,
-    const float max_weight, const int free_space_full_weight) {
+    const float max_weight, const int free_space_full_weight, const int behind_dropoff) {
   const int lin = block_list[get_group_id(0)];
   const int slot = index[lin];
   const int plane = dims.x * dims.y;
@@ -97,7 +101,11 @@ __kernel __attribute__((reqd_work_group_size(EMF_INTEGRATE_ITEMS, 1, 1))) void i
   // NaN depth fails every comparison.
   const int16 observed = in_view & (d_meas > 0.0f) & (sdf >= -truncation);
   const int16 free_space = sdf > truncation;
-  const float16 w = (free_space & (int16)(free_space_full_weight ? -1 : 0)) ? 1.0f : q;
+  float16 w = (free_space & (int16)(free_space_full_weight ? -1 : 0)) ? 1.0f : q;
+  if (behind_dropoff) {
+    const float16 drop = (truncation + sdf) / (truncation - voxel_size);
+    w = sdf < -voxel_size ? w * (drop > 0.0f ? drop : 0.0f) : w;
+  }
   __global int* words = (__global int*)voxels + slot * EMF_BLOCK_VOXELS + get_local_id(0) * 16;
   const int16 raw = vload16(0, words);
   const int16 old_t = EMF_WORD_TSDF(raw);

@@ -107,6 +107,11 @@ struct ObjectOptions {
   /// voxel pool free: the background (and the objects' growth) keep room in a fixed pool.
   double min_free_pool_fraction = 0.25;
   bool free_space_full_weight = false;
+  /// Object volumes weight an observation behind the surface (d < -voxel) by a linear drop-off
+  /// to 0 at -truncation (Voxblox's rule; off, as in the paper): the projective distance behind
+  /// a surface overestimates the true one near edges seen from the side. Off by default: it
+  /// weakens the model's inside, which re-acquisition leans on; docs/deviations.md.
+  bool behind_dropoff = false;
   bool filter_depth = false;
   /// With filter_depth off, the E-step, object tracking and creation read the raw depth through
   /// a bilateral filter of their own: window radius, px (0 = raw), and range sigma, m.
@@ -203,6 +208,9 @@ struct ObjectOptions {
     b.boolean("free_space_full_weight", free_space_full_weight,
               "object volumes integrate free space with weight 1 whatever q (the authors' "
               "rule; off: weighted by q, which keeps other surfaces from eroding the object)");
+    b.boolean("behind_dropoff", behind_dropoff,
+              "object volumes weight observations behind the surface down to 0 at -truncation "
+              "(off: full weight, the paper)");
     b.boolean("filter_depth", filter_depth,
               "the E-step and the objects use the camera's bilateral-filtered depth (the paper; "
               "off: the raw depth through objects.depth_filter_*, which keeps silhouettes sharp)");

@@ -260,6 +260,17 @@ double objectTruncation(const ObjectOptions& options, double map_truncation_voxe
   return std::min(wanted, map_truncation_voxels * voxel_size_m);
 }
 
+map::VolumeSpec objectVolumeSpec(const map::MapOptions& map_options, const ObjectOptions& options,
+                                 const VolumePlacement& placement, double pixel_footprint_m) {
+  map::VolumeSpec spec = map::VolumeSpec::object(map_options, placement.resolution,
+                                                 static_cast<float>(placement.voxel_size_m));
+  spec.free_space_full_weight = options.free_space_full_weight;
+  spec.behind_dropoff = options.behind_dropoff;
+  spec.truncation_m = static_cast<float>(objectTruncation(
+      options, map_options.truncation_voxels, placement.voxel_size_m, pixel_footprint_m));
+  return spec;
+}
+
 int maskVisiblePixels(const cv::Mat& mask, const ObjectOptions& options) {
   const int b = options.visibility_border_px;
   if (mask.empty() || mask.cols <= 2 * b || mask.rows <= 2 * b) return 0;

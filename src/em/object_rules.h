@@ -11,6 +11,8 @@
 
 #include "core/frame.h"
 #include "em/em_options.h"
+#include "map/map_options.h"
+#include "map/volume.h"
 
 namespace emf::em {
 
@@ -100,6 +102,11 @@ cv::Mat creationMask(const cv::Mat& mask, const cv::Mat& vertex, const ObjectOpt
 /// object) and at most map_truncation_voxels voxels.
 double objectTruncation(const ObjectOptions& options, double map_truncation_voxels,
                         double voxel_size_m, double pixel_footprint_m);
+
+/// The volume of a new object placed by placeObject: its grid and voxel size, objectTruncation
+/// and the objects' integration rules (free_space_full_weight, behind_dropoff).
+map::VolumeSpec objectVolumeSpec(const map::MapOptions& map_options, const ObjectOptions& options,
+                                 const VolumePlacement& placement, double pixel_footprint_m);
 
 /// All creation checks of step 5 for one unmatched detection. `reason` says which failed. Beyond
 /// the paper: a mask with fewer than objects.invisible_min_px visible pixels (maskVisiblePixels)

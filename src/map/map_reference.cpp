@@ -95,7 +95,7 @@ std::vector<int> blockListReference(const VolumeHostData& vol, const std::vector
 void integrateReference(VolumeHostData& vol, const std::vector<int>& block_list,
                         const cv::Mat& depth_m, const cv::Mat& weights, const cv::Mat& fg_mask,
                         const CameraF& cam, const PoseRows& T_camera_volume, float max_weight,
-                        bool free_space_full_weight) {
+                        bool free_space_full_weight, bool behind_dropoff) {
   const float truncation = vol.truncation_m;
   const float inv_truncation = 1.0f / truncation;
   const float vs = vol.voxel_size_m;
@@ -126,7 +126,11 @@ void integrateReference(VolumeHostData& vol, const std::vector<int>& block_list,
       if (!(d_meas > 0.0f && sdf >= -truncation)) continue;
       const float q = weights.empty() ? 1.0f : weights.at<float>(py, px);
       const bool free_space = sdf > truncation;
-      const float w = (free_space && free_space_full_weight) ? 1.0f : q;
+      float w = (free_space && free_space_full_weight) ? 1.0f : q;
+      if (behind_dropoff && sdf < -vs) {
+        const float drop = (truncation + sdf) / (truncation - vs);
+        w = w * (drop > 0.0f ? drop : 0.0f);
+      }
       if (w > 0.0f) {
         Voxel& vox = vol.voxels[static_cast<size_t>(slot) * kBlockVoxels + lid];
         const float w_old = static_cast<float>(vox.weight_q) / kWeightScale;

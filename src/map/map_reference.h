@@ -24,7 +24,7 @@ std::vector<uint8_t> markBlocksReference(const cv::Mat& depth_m, const CameraF& 
 void integrateReference(VolumeHostData& vol, const std::vector<int>& block_list,
                         const cv::Mat& depth_m, const cv::Mat& weights, const cv::Mat& fg_mask,
                         const CameraF& cam, const PoseRows& T_camera_volume, float max_weight,
-                        bool free_space_full_weight);
+                        bool free_space_full_weight, bool behind_dropoff = false);
 
 /// The blocks integrate_blocks processes after an allocation: allocated in `vol` and marked
 /// (or every allocated block when integrate_all), in grid order.

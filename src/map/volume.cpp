@@ -221,15 +221,15 @@ void Volume::integrate(const IntegrationInput& frame) {
   const core::Intrinsics& k = frame.intrinsics;
   const MapOptions& o = pool_.options();
   const size_t blocks = static_cast<size_t>(last_report_.listed_blocks);
-  cl::setArgs(integrate_, block_list_, index_, dimsBlocks(), pool_.voxels(), *frame.depth,
-              frame.weights ? *frame.weights : pool_.dummy(),
-              static_cast<cl_int>(frame.weights != nullptr), static_cast<cl_int>(k.width),
-              static_cast<cl_int>(k.height), static_cast<cl_float>(k.fx),
-              static_cast<cl_float>(k.fy), static_cast<cl_float>(k.cx), static_cast<cl_float>(k.cy),
-              row4(T_camera_volume, 0), row4(T_camera_volume, 1), row4(T_camera_volume, 2),
-              static_cast<cl_float>(spec_.voxel_size_m), static_cast<cl_float>(spec_.truncation_m),
-              static_cast<cl_float>(1.0f / spec_.truncation_m), static_cast<cl_float>(o.max_weight),
-              static_cast<cl_int>(spec_.free_space_full_weight));
+  cl::setArgs(
+      integrate_, block_list_, index_, dimsBlocks(), pool_.voxels(), *frame.depth,
+      frame.weights ? *frame.weights : pool_.dummy(), static_cast<cl_int>(frame.weights != nullptr),
+      static_cast<cl_int>(k.width), static_cast<cl_int>(k.height), static_cast<cl_float>(k.fx),
+      static_cast<cl_float>(k.fy), static_cast<cl_float>(k.cx), static_cast<cl_float>(k.cy),
+      row4(T_camera_volume, 0), row4(T_camera_volume, 1), row4(T_camera_volume, 2),
+      static_cast<cl_float>(spec_.voxel_size_m), static_cast<cl_float>(spec_.truncation_m),
+      static_cast<cl_float>(1.0f / spec_.truncation_m), static_cast<cl_float>(o.max_weight),
+      static_cast<cl_int>(spec_.free_space_full_weight), static_cast<cl_int>(spec_.behind_dropoff));
   cl::enqueue(ctx_.queue(), integrate_, blocks * kIntegrateItems, 0, 0, kIntegrateItems);
   if (spec_.has_counts && frame.fg_mask) {
     cl::setArgs(count_, block_list_, count_index_, dimsBlocks(), pool_.voxels(), *frame.depth,

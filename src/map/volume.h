@@ -42,6 +42,9 @@ struct VolumeSpec {
   /// Free space (beyond +truncation) is integrated with weight 1 whatever the association q
   /// (the authors' rule; map.free_space_full_weight for the background).
   bool free_space_full_weight = true;
+  /// Observations behind the surface (d < -voxel) count with a weight that falls linearly to 0
+  /// at -truncation (Voxblox's drop-off; off in the paper). Objects: objects.behind_dropoff.
+  bool behind_dropoff = false;
 
   /// The background of docs/method.md#background-volume from map.background_voxel_m /
   /// background_resolution (rounded up to whole blocks) / truncation_voxels.

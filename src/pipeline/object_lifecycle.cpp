@@ -333,12 +333,9 @@ bool ObjectLifecycle::createObject(const core::Detection& d, const cv::Mat& vert
     logDebug("frame ", frames_, ": no object for '", d.class_name, "': ", reason);
     return false;
   }
-  map::VolumeSpec spec = map::VolumeSpec::object(config_.map, placement.resolution,
-                                                 static_cast<float>(placement.voxel_size_m));
-  spec.free_space_full_weight = opt.free_space_full_weight;
   const double centre_depth_m = (T_world_camera_.inverse() * placement.centre_world).z();
-  spec.truncation_m = static_cast<float>(em::objectTruncation(
-      opt, config_.map.truncation_voxels, placement.voxel_size_m, centre_depth_m / intrinsics_.fx));
+  const map::VolumeSpec spec =
+      em::objectVolumeSpec(config_.map, opt, placement, centre_depth_m / intrinsics_.fx);
   Eigen::Isometry3d T_world_volume = Eigen::Isometry3d::Identity();
   T_world_volume.translation() =
       placement.centre_world - Eigen::Vector3d::Constant(spec.extentM().x() / 2.0);

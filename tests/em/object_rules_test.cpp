@@ -250,6 +250,28 @@ TEST(ObjectRules, ObjectTruncationInVoxelsWithAPixelFloorAndTheMapsCap) {
   EXPECT_NEAR(objectTruncation(o, map_voxels, 0.0057, 0.0175), 0.057, kTruncationToleranceM);
 }
 
+TEST(ObjectRules, ObjectVolumeSpecCarriesTheObjectsIntegrationRules) {
+  ObjectOptions o;
+  map::MapOptions m;
+  VolumePlacement p;
+  p.resolution = 64;
+  p.voxel_size_m = 0.01;
+  p.extent_m = 0.64;
+  const map::VolumeSpec a = objectVolumeSpec(m, o, p, 2.3 / 262.5);
+  EXPECT_EQ(a.dims_blocks, Eigen::Vector3i(8, 8, 8));
+  EXPECT_FLOAT_EQ(a.voxel_size_m, 0.01f);
+  EXPECT_NEAR(a.truncation_m, objectTruncation(o, m.truncation_voxels, 0.01, 2.3 / 262.5),
+              kTruncationToleranceM + 1e-8);  // stored as float
+  EXPECT_TRUE(a.has_counts);
+  EXPECT_FALSE(a.free_space_full_weight);
+  EXPECT_FALSE(a.behind_dropoff);
+  o.free_space_full_weight = true;
+  o.behind_dropoff = true;
+  const map::VolumeSpec b = objectVolumeSpec(m, o, p, 2.3 / 262.5);
+  EXPECT_TRUE(b.free_space_full_weight);
+  EXPECT_TRUE(b.behind_dropoff);
+}
+
 TEST(ObjectRules, CreationChecks) {
   ObjectOptions o;
   core::Detection d = detection("cup", {100, 100, 100, 100});

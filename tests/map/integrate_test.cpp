@@ -186,6 +186,58 @@ TEST_F(Integration, AssociationWeightsAndFreeSpaceRuleMatchReference) {
   }
 }
 
+TEST_F(Integration, BehindTheSurfaceDropOffMatchesReference) {
+  // One frame into a background-sized volume with and without the drop-off: the device matches
+  // the reference, and a voxel at projective distance d behind the surface (d < -voxel) holds
+  // weight (truncation + d) / (truncation - voxel) instead of 1; in front of it weight 1 both ways.
+  map::MapOptions o = smallOptions();
+  map::VoxelPool pool(ctx(), o);
+  const Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  const core::Intrinsics k = testIntrinsics(320, 240);
+  const Scene scene;
+  Frame f = makeFrame(renderDepth(scene, k, T), k, T);
+  constexpr double kWeightTolerance = 2.0 / 256.0;  // the stored weight's step, and rounding
+  for (bool dropoff : {false, true}) {
+    SCOPED_TRACE(dropoff ? "drop-off" : "full weight behind");
+    map::VolumeSpec spec = map::VolumeSpec::background(o);
+    spec.behind_dropoff = dropoff;
+    map::Volume vol(pool, spec, map::backgroundVolumePose(o, spec, T));
+    map::VolumeHostData h;
+    EXPECT_EQ(fuseAndCompare(vol, f, &h), 0);
+    const map::VolumeHostView v = h.view();
+    const map::PoseRows T_cv = map::PoseRows::from(T.inverse() * vol.T_world_volume());
+    int behind = 0, front = 0;
+    double worst = 0.0;
+    for (size_t lin = 0; lin < h.index.size(); ++lin) {
+      if (h.index[lin] < 0) continue;
+      const Eigen::Vector3i base = map::blockCoords(h.dims_blocks, static_cast<int>(lin)) * 8;
+      for (int n = 0; n < map::kBlockVoxels; ++n) {
+        const Eigen::Vector3i vx = base + Eigen::Vector3i(n % 8, (n / 8) % 8, n / 64);
+        const Eigen::Vector3f pc = T_cv.transform(map::voxelCentre(vx, spec.voxel_size_m));
+        int px, py;
+        if (pc.z() <= 0 || !map::projectToPixel(pc, cameraF(k), &px, &py)) continue;
+        const float sdf = f.depth_host.at<float>(py, px) - pc.z();
+        if (!(std::abs(sdf) < spec.truncation_m)) continue;
+        const double w = h.voxels[static_cast<size_t>(v.voxelIndex(vx))].weight_q / 256.0;
+        double expected = 1.0;
+        if (sdf < -spec.voxel_size_m) {
+          ++behind;
+          if (dropoff) {
+            expected = (spec.truncation_m + sdf) / (spec.truncation_m - spec.voxel_size_m);
+          }
+        } else {
+          ++front;
+        }
+        if (expected * 256.0 < 0.5) continue;  // stored as 0: not updated
+        worst = std::max(worst, std::abs(w - expected));
+      }
+    }
+    EXPECT_GT(behind, 1000);
+    EXPECT_GT(front, 1000);
+    EXPECT_LE(worst, kWeightTolerance);
+  }
+}
+
 TEST_F(Integration, WeightCapAndRunningAverage) {
   map::MapOptions o = smallOptions();
   o.max_weight = 5;
