@@ -13,6 +13,24 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
 class Integration : public MapTest {};
 
+/// Calls fn(voxel, pixel x, pixel y, camera-frame centre) for every allocated voxel of `h` whose
+/// centre projects into the image (T_cv: volume frame -> camera frame).
+template <typename Fn>
+void forEachVoxelInView(const map::VolumeHostData& h, float voxel_size_m, const map::PoseRows& T_cv,
+                        const core::Intrinsics& k, Fn fn) {
+  for (size_t lin = 0; lin < h.index.size(); ++lin) {
+    if (h.index[lin] < 0) continue;
+    const Eigen::Vector3i base = map::blockCoords(h.dims_blocks, static_cast<int>(lin)) * 8;
+    for (int n = 0; n < map::kBlockVoxels; ++n) {
+      const Eigen::Vector3i vx = base + Eigen::Vector3i(n % 8, (n / 8) % 8, n / 64);
+      const Eigen::Vector3f pc = T_cv.transform(map::voxelCentre(vx, voxel_size_m));
+      int px, py;
+      if (pc.z() <= 0 || !map::projectToPixel(pc, cameraF(k), &px, &py)) continue;
+      fn(vx, px, py, pc);
+    }
+  }
+}
+
 TEST_F(Integration, AllocationMarksTheTruncationBandAsTheReference) {
   const map::MapOptions o = smallOptions();
   map::VoxelPool pool(ctx(), o);
@@ -156,25 +174,18 @@ TEST_F(Integration, AssociationWeightsAndFreeSpaceRuleMatchReference) {
     const map::VolumeHostView v = h.view();
     int band = 0, free_full = 0, free_zero = 0;
     const map::PoseRows T_cv = map::PoseRows::from(T.inverse() * vol.T_world_volume());
-    for (size_t lin = 0; lin < h.index.size(); ++lin) {
-      if (h.index[lin] < 0) continue;
-      const Eigen::Vector3i base = map::blockCoords(h.dims_blocks, static_cast<int>(lin)) * 8;
-      for (int n = 0; n < map::kBlockVoxels; ++n) {
-        const Eigen::Vector3i vx = base + Eigen::Vector3i(n % 8, (n / 8) % 8, n / 64);
-        const Eigen::Vector3f pc = T_cv.transform(map::voxelCentre(vx, spec.voxel_size_m));
-        int px, py;
-        if (pc.z() <= 0 || !map::projectToPixel(pc, cameraF(k), &px, &py)) continue;
-        if (px >= k.width / 3 - 1) continue;
-        const float sdf = f.depth_host.at<float>(py, px) - pc.z();
-        const map::Voxel& vox = h.voxels[static_cast<size_t>(v.voxelIndex(vx))];
-        if (std::abs(sdf) <= spec.truncation_m) {
-          ++band;
-          EXPECT_EQ(vox.weight_q, 0);
-        } else if (sdf > spec.truncation_m) {
-          (vox.weight_q == 256 ? free_full : free_zero)++;
-        }
-      }
-    }
+    forEachVoxelInView(h, spec.voxel_size_m, T_cv, k,
+                       [&](const Eigen::Vector3i& vx, int px, int py, const Eigen::Vector3f& pc) {
+                         if (px >= k.width / 3 - 1) return;
+                         const float sdf = f.depth_host.at<float>(py, px) - pc.z();
+                         const map::Voxel& vox = h.voxels[static_cast<size_t>(v.voxelIndex(vx))];
+                         if (std::abs(sdf) <= spec.truncation_m) {
+                           ++band;
+                           EXPECT_EQ(vox.weight_q, 0);
+                         } else if (sdf > spec.truncation_m) {
+                           (vox.weight_q == 256 ? free_full : free_zero)++;
+                         }
+                       });
     EXPECT_GT(band, 1000);
     if (full_weight) {
       EXPECT_GT(free_full, 100);
@@ -208,30 +219,24 @@ TEST_F(Integration, BehindTheSurfaceDropOffMatchesReference) {
     const map::PoseRows T_cv = map::PoseRows::from(T.inverse() * vol.T_world_volume());
     int behind = 0, front = 0;
     double worst = 0.0;
-    for (size_t lin = 0; lin < h.index.size(); ++lin) {
-      if (h.index[lin] < 0) continue;
-      const Eigen::Vector3i base = map::blockCoords(h.dims_blocks, static_cast<int>(lin)) * 8;
-      for (int n = 0; n < map::kBlockVoxels; ++n) {
-        const Eigen::Vector3i vx = base + Eigen::Vector3i(n % 8, (n / 8) % 8, n / 64);
-        const Eigen::Vector3f pc = T_cv.transform(map::voxelCentre(vx, spec.voxel_size_m));
-        int px, py;
-        if (pc.z() <= 0 || !map::projectToPixel(pc, cameraF(k), &px, &py)) continue;
-        const float sdf = f.depth_host.at<float>(py, px) - pc.z();
-        if (!(std::abs(sdf) < spec.truncation_m)) continue;
-        const double w = h.voxels[static_cast<size_t>(v.voxelIndex(vx))].weight_q / 256.0;
-        double expected = 1.0;
-        if (sdf < -spec.voxel_size_m) {
-          ++behind;
-          if (dropoff) {
-            expected = (spec.truncation_m + sdf) / (spec.truncation_m - spec.voxel_size_m);
+    forEachVoxelInView(
+        h, spec.voxel_size_m, T_cv, k,
+        [&](const Eigen::Vector3i& vx, int px, int py, const Eigen::Vector3f& pc) {
+          const float sdf = f.depth_host.at<float>(py, px) - pc.z();
+          if (!(std::abs(sdf) < spec.truncation_m)) return;
+          const double w = h.voxels[static_cast<size_t>(v.voxelIndex(vx))].weight_q / 256.0;
+          double expected = 1.0;
+          if (sdf < -spec.voxel_size_m) {
+            ++behind;
+            if (dropoff) {
+              expected = (spec.truncation_m + sdf) / (spec.truncation_m - spec.voxel_size_m);
+            }
+          } else {
+            ++front;
           }
-        } else {
-          ++front;
-        }
-        if (expected * 256.0 < 0.5) continue;  // stored as 0: not updated
-        worst = std::max(worst, std::abs(w - expected));
-      }
-    }
+          if (expected * 256.0 < 0.5) return;  // stored as 0: not updated
+          worst = std::max(worst, std::abs(w - expected));
+        });
     EXPECT_GT(behind, 1000);
     EXPECT_GT(front, 1000);
     EXPECT_LE(worst, kWeightTolerance);
