@@ -14,6 +14,13 @@ endfunction()
 # references of the kernels must compute the same rounding on arm64 as on x86-64.
 add_compile_options($<$<COMPILE_LANGUAGE:CXX,C>:-ffp-contract=off>)
 
+# Debug and RelWithDebInfo carry line tables only (-g1, after CMake's -g): backtraces, perf and
+# sanitizer reports keep file:line, and the build is about a third faster on two cores than with
+# full debug info (locals and types). EMF_FULL_DEBUG_INFO=ON keeps CMake's -g for a debugger.
+if(NOT EMF_FULL_DEBUG_INFO AND CMAKE_CXX_COMPILER_ID MATCHES "GNU|Clang")
+  add_compile_options($<$<AND:$<COMPILE_LANGUAGE:CXX,C>,$<CONFIG:Debug,RelWithDebInfo>>:-g1>)
+endif()
+
 set(EMF_SANITIZE_FLAGS "")
 if(EMF_SANITIZE)
   if(NOT EMF_SANITIZE MATCHES "^(address,undefined|undefined,address|address|undefined|thread)$")
