@@ -112,6 +112,7 @@ DnnDetector::DnnDetector(const DnnOptions& options) : options_(options) {
     target_ = Target::kCpu;
   }
   if (!warning.empty()) warn(warning);
+  if (options_.threads > 0) cv::setNumThreads(options_.threads);
   net_.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
   net_.setPreferableTarget(target_ == Target::kOpenCl ? cv::dnn::DNN_TARGET_OPENCL
                                                       : cv::dnn::DNN_TARGET_CPU);

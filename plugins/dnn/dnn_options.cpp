@@ -14,7 +14,7 @@ namespace {
 
 constexpr const char* kKeys =
     "model, layout, input, classes, score, nms, mask_threshold, target, max_detections, "
-    "mask_values";
+    "mask_values, threads";
 
 [[noreturn]] void configError(const std::string& message) {
   throw DnnError(EMF_ERROR_CONFIG, "dnn: " + message);
@@ -101,6 +101,8 @@ DnnOptions DnnOptions::parse(const std::string& config) {
       }
     } else if (key == "max_detections") {
       o.max_detections = parseInt(key, value, 1, 1000);
+    } else if (key == "threads") {
+      o.threads = parseInt(key, value, 0, 256);
     } else if (key == "mask_values") {
       if (value == "logits") {
         o.mask_logits = true;

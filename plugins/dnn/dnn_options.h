@@ -42,6 +42,10 @@ struct DnnOptions {
   Target target = Target::kCpu;   // `target`: cpu | opencl
   int max_detections = 100;       // `max_detections`: kept per frame after NMS [1, 1000]
   bool mask_logits = true;        // `mask_values`: logits | probabilities (maskrcnn masks)
+  /// `threads`: OpenCV's worker threads for the network (cv::setNumThreads, process-wide: in
+  /// emf's own process it also sets them for emf's OpenCV calls) [0, 256]; 0 = OpenCV's
+  /// default (one per core). Fewer leave cores to the SLAM while a detection runs.
+  int threads = 0;
 
   /// Parses `config` ("key=value,..."; empty items are ignored). Throws DnnError
   /// (EMF_ERROR_CONFIG) naming the key, the bad value and the accepted range.

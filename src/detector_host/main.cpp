@@ -6,10 +6,12 @@
 //   emf_detector_host <plugin.so> <config> <source uri> <fx> <fy> <cx> <cy> <width> <height>
 #include <sys/mman.h>
 #include <sys/prctl.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -107,7 +109,7 @@ void respond(Segment& seg, emf::pipeline::DetectorPlugin& plugin) {
 int main(int argc, char** argv) {
   // Ends with emf: a parent killed without a word must not leave this process behind.
   ::prctl(PR_SET_PDEATHSIG, SIGKILL);
-  if (argc != 10) {
+  if (argc != 11) {
     std::fprintf(stderr,
                  "emf_detector_host: started by emf for detector.isolation: process; not meant "
                  "to be run by hand\n");
@@ -118,6 +120,12 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "emf_detector_host: no shared memory segment on fd %d\n",
                  ipc::kChildShmFd);
     return 2;
+  }
+  // detector.nice, before the plugin starts any thread (its threads inherit it).
+  const int nice = std::atoi(argv[10]);
+  if (nice > 0 && ::setpriority(PRIO_PROCESS, 0, nice) != 0) {
+    std::fprintf(stderr, "emf_detector_host: cannot set niceness %d: %s\n", nice,
+                 std::strerror(errno));
   }
   emf::core::Intrinsics k;
   k.fx = std::atof(argv[4]);

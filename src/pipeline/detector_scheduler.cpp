@@ -1,8 +1,14 @@
 #include "pipeline/detector_scheduler.h"
 
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <exception>
 #include <filesystem>
 
@@ -66,7 +72,9 @@ DetectorScheduler::DetectorScheduler(const DetectorOptions& options, const std::
       usesProcess(options, resolvePluginPath(options.plugin, pluginSearchPath(options)))) {
     isolated_ = std::make_unique<IsolatedDetector>(
         detectorHostPath(), resolvePluginPath(options.plugin, pluginSearchPath(options)),
-        options.plugin_config, source_uri, intrinsics, options.deadline_s, kLoadTimeoutS);
+        options.plugin_config, source_uri, intrinsics, options.deadline_s, kLoadTimeoutS,
+        // Sequential: the SLAM thread waits for the child, which must not yield to others.
+        options.mode == DetectorMode::kAsync ? options.nice : 0);
     IsolatedDetector* isolated = isolated_.get();
     detect_ = [isolated](const core::Frame& f, const cv::Mat* q0, const cv::Mat* residual) {
       return isolated->detect(f, q0, residual);
@@ -99,6 +107,7 @@ void DetectorScheduler::init(const DetectorOptions& options, const core::Intrins
   }
   async_ = options.mode == DetectorMode::kAsync;
   every_n_frames_ = options.every_n_frames;
+  nice_ = options.nice;
   stats_.plugin = name_;
   stats_.mode = choiceName(options.mode, detectorModeNames());
   if (!enabled() || !async_) return;
@@ -182,6 +191,13 @@ void DetectorScheduler::runDetector(const Slot& slot, DetectionBatch* batch) {
 }
 
 void DetectorScheduler::threadMain() {
+  // Linux: PRIO_PROCESS with a thread id sets that thread's niceness; the threads it starts
+  // inherit it.
+  if (nice_ > 0 &&
+      ::setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), nice_) != 0) {
+    logWarning("detector: cannot set the detector thread's niceness to ", nice_, " (",
+               std::strerror(errno), "); it runs at the SLAM's priority");
+  }
   std::unique_lock<std::mutex> lock(mutex_);
   for (;;) {
     wake_.wait(lock, [this] { return stop_ || busy_; });
@@ -306,6 +322,11 @@ void DetectorScheduler::waitIdle() {
   if (!enabled() || !async_) return;
   std::unique_lock<std::mutex> lock(mutex_);
   idle_.wait(lock, [this] { return !busy_; });
+}
+
+bool DetectorScheduler::busy() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return busy_;
 }
 
 DetectorStats DetectorScheduler::stats() const {

@@ -130,6 +130,9 @@ class DetectorScheduler {
   /// stays for the next submit()). Returns at once when idle or sequential.
   void waitIdle();
 
+  /// Async: whether the detector thread is working on a frame now (benches, tests).
+  bool busy() const;
+
   /// The counters so far.
   DetectorStats stats() const;
 
@@ -158,6 +161,7 @@ class DetectorScheduler {
   std::string name_;
   bool async_ = false;
   int every_n_frames_ = 30;
+  int nice_ = 0;  // DetectorOptions::nice
   bool warned_source_detections_ = false;
   bool warned_skipped_labels_ = false;
 

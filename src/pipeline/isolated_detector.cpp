@@ -90,13 +90,14 @@ std::string detectorHostPath() {
 IsolatedDetector::IsolatedDetector(std::string host_path, std::string plugin_path,
                                    std::string config, std::string source_uri,
                                    const core::Intrinsics& intrinsics, double deadline_s,
-                                   double load_timeout_s)
+                                   double load_timeout_s, int nice)
     : host_path_(std::move(host_path)),
       plugin_path_(std::move(plugin_path)),
       config_(std::move(config)),
       source_uri_(std::move(source_uri)),
       intrinsics_(intrinsics),
-      deadline_s_(deadline_s) {
+      deadline_s_(deadline_s),
+      nice_(std::to_string(nice)) {
   name_ = std::filesystem::path(plugin_path_).stem().string();
   shm_fd_ = ::memfd_create("emf-detector", MFD_CLOEXEC);
   if (shm_fd_ < 0) {
@@ -181,6 +182,7 @@ std::string IsolatedDetector::spawn(double timeout_s, emf_status* status) {
     argv.push_back(const_cast<char*>(s->c_str()));
   }
   for (const std::string& s : k) argv.push_back(const_cast<char*>(s.c_str()));
+  argv.push_back(const_cast<char*>(nice_.c_str()));
   argv.push_back(nullptr);
   pid_t pid = -1;
   const int rc = ::posix_spawn(&pid, host_path_.c_str(), &actions, nullptr, argv.data(), environ);

@@ -32,10 +32,11 @@ class IsolatedDetector {
 
   /// Starts the host (`host_path`) on the plugin at `plugin_path` (resolved) and waits for it to
   /// load the plugin (up to `load_timeout_s`). Throws PluginError with the plugin's own load
-  /// error, or naming the host when it cannot be started.
+  /// error, or naming the host when it cannot be started. The host, and every thread it starts,
+  /// runs at niceness `nice` (0-19; 0 = the caller's).
   IsolatedDetector(std::string host_path, std::string plugin_path, std::string config,
                    std::string source_uri, const core::Intrinsics& intrinsics, double deadline_s,
-                   double load_timeout_s);
+                   double load_timeout_s, int nice = 0);
   ~IsolatedDetector();
   IsolatedDetector(const IsolatedDetector&) = delete;
   IsolatedDetector& operator=(const IsolatedDetector&) = delete;
@@ -68,6 +69,7 @@ class IsolatedDetector {
   std::string host_path_, plugin_path_, config_, source_uri_;
   core::Intrinsics intrinsics_;
   double deadline_s_;
+  std::string nice_;  // the host's niceness, as its argument
   std::string name_;
   bool new_objects_only_ = false, reads_feedback_ = true;
 

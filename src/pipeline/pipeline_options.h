@@ -42,6 +42,16 @@ struct DetectorOptions {
   /// Under process isolation: a detect() call that takes longer is a hang; the child is killed
   /// and restarted (the SLAM waits this long at most in sequential mode).
   double deadline_s = 5.0;
+  /// Niceness of the async detector (Linux nice, 0-19; 0 = the SLAM's own priority): the
+  /// detector thread, and under process isolation the plugin's whole process (its worker
+  /// threads included), so that the SLAM thread wins the cores while a detection runs.
+  /// In-process, worker threads another thread started earlier (OpenCV's pool) keep their
+  /// priority: with isolation none, the dnn plugin's threads=1 keeps the network on the niced
+  /// thread. Sequential mode (the detector on the SLAM thread, or the SLAM thread waiting for
+  /// the plugin's process) is not niced. 10: while a
+  /// detection runs the SLAM keeps most of its rate and the detection takes about twice as long
+  /// (docs/benchmarks.md#the-detectors-share-of-the-cores-benchdetector_share).
+  int nice = 10;
 
   void bind(OptionBinder& b) {
     b.text("plugin", plugin, "detector plugin name or path ('' = none)");
@@ -54,6 +64,8 @@ struct DetectorOptions {
              "loaded by path (auto)");
     b.real("deadline_s", deadline_s, 0.01, 3600.0, "s",
            "isolated plugin: a call taking longer is a hang (child killed, restarted)");
+    b.integer("nice", nice, 0, 19, "",
+              "niceness of the async detector thread and of an isolated plugin's process");
   }
 };
 

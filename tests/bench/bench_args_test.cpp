@@ -119,12 +119,16 @@ TEST(BenchPrograms, BadArgumentsStopWithExitCode2AndNameTheOption) {
       {"isolation_bench", "--width 10", "--width '10': expected an integer in [64, 4096]"},
       {"dnn_bench", "--instances 21", "--instances '21': expected an integer in [1, 20]"},
       {"dnn_bench", "--depth 640x", "--depth '640x': expected WxH"},
+      {"detector_share", "--frames 10", "--frames '10': expected an integer in [30, 100000]"},
+      {"detector_share", "--size 640", "--size '640': expected WxH"},
+      {"detector_share", "--rate -1", "--rate '-1': expected a number in [0"},
   };
   for (const Case& c : cases) {
     const auto it = paths.find(c.program);
     if (it == paths.end()) {
-      ASSERT_EQ(c.program, "dnn_bench") << "not built: " << c.program;
-      continue;  // the dnn plugin (and its bench) is optional
+      ASSERT_TRUE(c.program == "dnn_bench" || c.program == "detector_share")
+          << "not built: " << c.program;
+      continue;  // the dnn plugin (and its benches) is optional
     }
     std::string log;
     EXPECT_EQ(test::runCommand(it->second + " " + c.args, &log), 2)

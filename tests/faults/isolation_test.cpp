@@ -6,7 +6,10 @@
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <thread>
 
 #include "io/trajectory.h"
@@ -70,6 +73,21 @@ TEST(Isolation, DetectionsAreTheSameAsInProcess) {
   ASSERT_EQ(b.detections.size(), 1u);
   EXPECT_EQ(cv::norm(a.detections[0].mask, b.detections[0].mask, cv::NORM_INF), 0.0);
   EXPECT_EQ(isolated->name(), in_process->name());
+}
+
+// detector.nice: the plugin's process runs at that niceness (field 19 of /proc/<pid>/stat).
+TEST(Isolation, TheChildRunsAtDetectorNice) {
+  IsolatedDetector isolated(detectorHostPath(), kFaulty, "", "synth:test", test::camera80x60(),
+                            kDeadlineS, kLoadS, 19);
+  expectTheCup(isolated.detect(frame(0)));
+  std::ifstream stat("/proc/" + std::to_string(isolated.childPid()) + "/stat");
+  std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
+  ASSERT_NE(text.rfind(')'), std::string::npos) << text;
+  // After "pid (comm)": state is field 3, nice field 19.
+  std::istringstream fields(text.substr(text.rfind(')') + 2));
+  std::string field;
+  for (int i = 3; i <= 19; ++i) fields >> field;
+  EXPECT_EQ(field, "19") << text;
 }
 
 TEST(Isolation, ASegfaultIsReportedAndTheChildComesBackAfterTheBackOff) {

@@ -2,6 +2,12 @@
 // copied into the slot, dropped while the detector is busy, and late results carry the frame
 // and poses they were computed on. A gate held by the test makes the detector "busy" without
 // any timing assumption.
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
 #include <condition_variable>
 #include <mutex>
 
@@ -197,6 +203,37 @@ TEST(DetectorSchedulerAsync, PluginOnTheDetectorThread) {
   EXPECT_EQ(st.runs, 3);
   EXPECT_EQ(st.rejected, 15);
   EXPECT_EQ(st.dropped_frames, 0);
+}
+
+}  // namespace
+}  // namespace emf::pipeline
+
+namespace emf::pipeline {
+namespace {
+
+int threadNice() {
+  errno = 0;
+  return ::getpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)));
+}
+
+// detector.nice: the detector thread runs at that niceness, the submitting (SLAM) thread keeps
+// its own. 19 can always be set without privileges.
+TEST(DetectorSchedulerAsync, TheDetectorThreadRunsAtDetectorNice) {
+  const int slam_nice = threadNice();
+  std::atomic<int> detector_nice{-100};
+  DetectorOptions o = async(1);
+  o.nice = 19;
+  DetectorScheduler s(
+      o, "nice",
+      [&](const core::Frame&, const cv::Mat*, const cv::Mat*) {
+        detector_nice = threadNice();
+        return DetectorOutput{};
+      },
+      smallCamera());
+  s.submit(makeFrame(0), poseOf(0));
+  s.waitIdle();
+  EXPECT_EQ(detector_nice.load(), 19);
+  EXPECT_EQ(threadNice(), slam_nice);
 }
 
 }  // namespace

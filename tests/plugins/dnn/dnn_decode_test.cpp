@@ -374,7 +374,7 @@ TEST(DnnIdentify, MaskRcnnByNameAndShape) {
 TEST(DnnOptionsTest, ParsesKeysAndRejectsBadValues) {
   const DnnOptions o = DnnOptions::parse(
       "model=/m.onnx,layout=maskrcnn,input=800x608,classes=/c.names,score=0.4,nms=0.6,"
-      "mask_threshold=0.3,target=opencl,max_detections=7,mask_values=probabilities");
+      "mask_threshold=0.3,target=opencl,max_detections=7,mask_values=probabilities,threads=1");
   EXPECT_EQ(o.model_path, "/m.onnx");
   EXPECT_EQ(o.layout, Layout::kMaskRcnn);
   EXPECT_EQ(o.input_width_px, 800);
@@ -386,14 +386,17 @@ TEST(DnnOptionsTest, ParsesKeysAndRejectsBadValues) {
   EXPECT_EQ(o.target, Target::kOpenCl);
   EXPECT_EQ(o.max_detections, 7);
   EXPECT_FALSE(o.mask_logits);
+  EXPECT_EQ(o.threads, 1);
   const DnnOptions d = DnnOptions::parse("model=/m.onnx");
+  EXPECT_EQ(d.threads, 0);
   EXPECT_EQ(d.layout, Layout::kYoloV8);
   EXPECT_EQ(d.input_width_px, 640);
   EXPECT_EQ(d.target, Target::kCpu);
   EXPECT_EQ(d.classes_path, defaultClassesPath());
-  for (const char* bad : {"model=/m,score=-0.1", "model=/m,nms=x", "model=/m,mask_threshold=1",
-                          "model=/m,input=0x5", "model=/m,input=64x", "model=/m,max_detections=0",
-                          "model=/m,mask_values=raw", "model", "", "model=/m,foo=1"}) {
+  for (const char* bad :
+       {"model=/m,score=-0.1", "model=/m,nms=x", "model=/m,mask_threshold=1", "model=/m,input=0x5",
+        "model=/m,input=64x", "model=/m,max_detections=0", "model=/m,mask_values=raw",
+        "model=/m,threads=-1", "model=/m,threads=257", "model", "", "model=/m,foo=1"}) {
     EXPECT_THROW(DnnOptions::parse(bad), DnnError) << bad;
   }
   EXPECT_NE(errorOf([] {
