@@ -30,6 +30,7 @@
 #include "pipeline/config.h"
 #include "pipeline/detector_scheduler.h"
 #include "pipeline/slam_system.h"
+#include "pipeline/stage_timer.h"
 #include "sources/open_source.h"
 
 namespace {
@@ -47,25 +48,6 @@ struct Setting {
   int nice = 0;
   int threads = 0;  // the dnn plugin's threads= (0 = OpenCV's default)
 };
-
-struct Percentiles {
-  double median = 0, p90 = 0, p99 = 0;
-  size_t count = 0;
-};
-
-Percentiles percentiles(std::vector<double> v) {
-  Percentiles p;
-  p.count = v.size();
-  if (v.empty()) return p;
-  std::sort(v.begin(), v.end());
-  const auto at = [&](double q) {
-    return v[std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())))];
-  };
-  p.median = at(0.5);
-  p.p90 = at(0.9);
-  p.p99 = at(0.99);
-  return p;
-}
 
 std::string generateModel(const std::string& out_dir) {
   const std::string path = out_dir + "/detector_share.onnx";
@@ -208,11 +190,12 @@ int main(int argc, char** argv) {
       }
       detector.reset();
       cv::setNumThreads(cv_threads);  // threads= of an in-process plugin is process-wide
-      const Percentiles a = percentiles(all), d = percentiles(during);
+      const emf::pipeline::TimingSummary a = emf::pipeline::summarize(all),
+                                         d = emf::pipeline::summarize(during);
       std::sort(alive.begin(), alive.end());
-      std::printf("  %-32s | %8.2f %9.2f %9.2f |", s.name.c_str(), a.median, a.p90, a.p99);
+      std::printf("  %-32s | %8.2f %9.2f %9.2f |", s.name.c_str(), a.median_ms, a.p90_ms, a.p99_ms);
       if (d.count > 0) {
-        std::printf(" %8.2f %9.2f %9.2f |", d.median, d.p90, d.p99);
+        std::printf(" %8.2f %9.2f %9.2f |", d.median_ms, d.p90_ms, d.p99_ms);
       } else {
         std::printf(" %28s |", "-");
       }
@@ -222,11 +205,11 @@ int main(int argc, char** argv) {
       char line[512];
       std::snprintf(
           line, sizeof(line),
-          "detector_share config=\"%s\" size=%ldx%ld frames=%zu slam_ms=%.2f slam_p90_ms=%.2f "
-          "slam_p99_ms=%.2f during_frames=%zu during_ms=%.2f during_p99_ms=%.2f runs=%lld "
+          "detector_share config=\"%s\" size=%ldx%ld frames=%d slam_ms=%.2f slam_p90_ms=%.2f "
+          "slam_p99_ms=%.2f during_frames=%d during_ms=%.2f during_p99_ms=%.2f runs=%lld "
           "detector_ms=%.1f\n",
-          s.name.c_str(), width, height, a.count, a.median, a.p90, a.p99, d.count, d.median, d.p99,
-          static_cast<long long>(stats.runs), stats.detector_ms_median);
+          s.name.c_str(), width, height, a.count, a.median_ms, a.p90_ms, a.p99_ms, d.count,
+          d.median_ms, d.p99_ms, static_cast<long long>(stats.runs), stats.detector_ms_median);
       summary += line;
     }
     std::printf("\n%s", summary.c_str());

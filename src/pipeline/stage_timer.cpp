@@ -22,6 +22,7 @@ TimingSummary summarize(std::vector<double> samples_ms) {
           ? samples_ms[samples_ms.size() / 2]
           : 0.5 * (samples_ms[samples_ms.size() / 2 - 1] + samples_ms[samples_ms.size() / 2]);
   s.p90_ms = rank(0.9);
+  s.p99_ms = rank(0.99);
   s.mean_ms = std::accumulate(samples_ms.begin(), samples_ms.end(), 0.0) / samples_ms.size();
   s.max_ms = samples_ms.back();
   return s;

@@ -11,11 +11,11 @@
 namespace emf::pipeline {
 
 struct TimingSummary {
-  double median_ms = 0, p90_ms = 0, mean_ms = 0, max_ms = 0;
+  double median_ms = 0, p90_ms = 0, p99_ms = 0, mean_ms = 0, max_ms = 0;
   int count = 0;
 };
 
-/// Median / p90 / mean / max of a list of samples (nearest-rank percentiles).
+/// Median / p90 / p99 / mean / max of a list of samples (nearest-rank percentiles).
 TimingSummary summarize(std::vector<double> samples_ms);
 
 class StageTimer {

@@ -18,7 +18,8 @@ TEST(StageTimer, MedianP90AndTotal) {
   }
   const auto s = t.summary();
   EXPECT_DOUBLE_EQ(s.at("track").median_ms, 5.5);
-  EXPECT_DOUBLE_EQ(s.at("track").p90_ms, 9.0);  // nearest rank: ceil(0.9 * 10) = 9th
+  EXPECT_DOUBLE_EQ(s.at("track").p90_ms, 9.0);   // nearest rank: ceil(0.9 * 10) = 9th
+  EXPECT_DOUBLE_EQ(s.at("track").p99_ms, 10.0);  // ceil(0.99 * 10) = 10th
   EXPECT_DOUBLE_EQ(s.at("track").max_ms, 10.0);
   EXPECT_DOUBLE_EQ(s.at("integrate").mean_ms, 12.0);
   EXPECT_DOUBLE_EQ(s.at("total").median_ms, 3 * 5.5 + 1);
