@@ -4,6 +4,7 @@
 // (pipeline/detector_ipc.h); not meant to be run by hand.
 //
 //   emf_detector_host <plugin.so> <config> <source uri> <fx> <fy> <cx> <cy> <width> <height>
+//                     <nice>   (detector.nice: set before the plugin loads)
 #include <sys/mman.h>
 #include <sys/prctl.h>
 #include <sys/resource.h>

@@ -48,8 +48,8 @@ struct DetectorOptions {
   /// In-process, worker threads another thread started earlier (OpenCV's pool) keep their
   /// priority: with isolation none, the dnn plugin's threads=1 keeps the network on the niced
   /// thread. Sequential mode (the detector on the SLAM thread, or the SLAM thread waiting for
-  /// the plugin's process) is not niced. 10: while a
-  /// detection runs the SLAM keeps most of its rate and the detection takes 2-3 times as long
+  /// the plugin's process) is not niced. 10: while a detection runs the SLAM keeps most of its
+  /// rate and the detection takes 2-3 times as long
   /// (docs/benchmarks.md#the-detectors-share-of-the-cores-benchdetector_share).
   int nice = 10;
 
