@@ -46,19 +46,30 @@ inline bool emf_depth_in_range(float d, float min_depth, float max_depth) {
 #ifndef PRE_RADIUS
 #define PRE_RADIUS 3
 #endif
+#ifndef PRE_STRIDE
+#define PRE_STRIDE 1
+#endif
 
-// Sixteen horizontally adjacent pixels per work item (float16 arithmetic: PoCL does not
-// vectorise across work items here, so the SIMD is explicit; GPUs see 16 independent lanes).
-// The window radius is a build option (-DPRE_RADIUS=r, one cached program per radius).
-// Invalid or out-of-image neighbours (loaded as NaN) are masked out of the sums. Global size:
-// (ceil(width / 16), height).
+// Sixteen pixels of a row per work item (float16 arithmetic: PoCL does not vectorise across
+// work items here, so the SIMD is explicit; GPUs see 16 independent lanes).
+// The window radius and the sample stride are build options (-DPRE_RADIUS=r -DPRE_STRIDE=s, one
+// cached program per pair). Invalid or out-of-image neighbours (loaded as NaN) are masked out of
+// the sums.
 // The helpers are always inlined: a call in the tap loop makes every live vector spill.
-__attribute__((always_inline)) inline float16 emf_load16(__global const float* row, int u,
+
+/// Depths of 16 pixels of a row: lane l reads row[u + l * step]; lanes outside the row read NaN
+/// (invalid: masked out of the sums like a missing depth).
+__attribute__((always_inline)) inline float16 emf_load16(__global const float* row, int u, int step,
                                                          int width) {
-  if (u >= 0 && u + 15 < width) return vload16(0, row + u);
-  // Lanes outside the row read NaN (invalid: masked out of the sums like a missing depth).
+  if (step == 1 && u >= 0 && u + 15 < width) return vload16(0, row + u);
+  if (step == 2 && u >= 0 && u + 31 < width) {
+    // The even lanes of two loads (swizzles: PoCL's shuffle2 runs lane by lane).
+    const float16 a = vload16(0, row + u), b = vload16(0, row + u + 16);
+    return (float16)(a.even, b.even);
+  }
   float16 r;
-#define EMF_PRE_LOAD(l) r.s##l = (u + 0x##l >= 0 && u + 0x##l < width) ? row[u + 0x##l] : NAN;
+#define EMF_PRE_LOAD(l) \
+  r.s##l = (u + 0x##l * step >= 0 && u + 0x##l * step < width) ? row[u + 0x##l * step] : NAN;
   EMF_PRE_LANES16(EMF_PRE_LOAD)
 #undef EMF_PRE_LOAD
   return r;
@@ -69,6 +80,10 @@ __attribute__((always_inline)) inline int16 emf_in_range16(float16 d, float min_
   // The comparisons are false for NaN.
   return (d > 0.0f) & (d >= min_depth) & (d <= max_depth);
 }
+
+/// d > 0 && d >= min_depth  <=>  d > this (floats: d >= m <=> d > the float below m), so a
+/// neighbour's range check is two comparisons (both false for NaN).
+inline float emf_above(float min_depth) { return fmax(0.0f, nextafter(min_depth, -INFINITY)); }
 
 /// exp(x) for x <= 0 (the bilateral weights): 2^(x log2 e) split into 2^n (exponent bits) and
 /// 2^f, |f| <= 1/2, by a degree-7 polynomial (relative error below 3e-7, a few float ulps of
@@ -91,36 +106,32 @@ __attribute__((always_inline)) inline float16 emf_exp_neg16(float16 x) {
   return y > -126.0f ? p * scale : 0.0f;
 }
 
-__kernel void preprocess_depth(__global const float* depth_in, __global float* depth_out,
-                               __global float4* vertex, const int width, const int height,
-                               const float inv_two_sigma_space_sq, const float sigma_depth,
-                               const float sigma_depth_per_m2, const float min_depth,
-                               const float max_depth, const float fx, const float fy,
-                               const float cx, const float cy, const float guard_max_depth,
-                               __global float* guarded, const int write_guarded) {
-  const int u0 = get_global_id(0) * 16;
-  const int v = get_global_id(1);
-  if (u0 >= width || v >= height) return;
+/// The bilateral filter at 16 pixels of row v, lane l at column u0 + l * step, with centre
+/// depths d0: the weighted mean of the window's usable depths (NaN where the centre is not
+/// usable), and in *hole the lanes whose window (inside the image) holds a pixel without usable
+/// depth. Per lane the operations do not depend on `step`: a pixel's result is the same to the
+/// bit whichever kernel computes it.
+__attribute__((always_inline)) inline float16 emf_bilateral16(
+    __global const float* depth_in, int width, int height, int u0, int v, int step, float16 d0,
+    float inv_two_sigma_space_sq, float sigma_depth, float sigma_depth_per_m2, float min_depth,
+    float max_depth, int16* hole_out) {
   const int16 lane = (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  const float16 d0 = emf_load16(depth_in + v * width, u0, width);
   const int16 centre_valid = emf_in_range16(d0, min_depth, max_depth);
-  // d > 0 && d >= min_depth  <=>  d > above (floats: d >= m <=> d > the float below m), so a
-  // neighbour's range check is two comparisons (both false for NaN).
-  const float above = fmax(0.0f, nextafter(min_depth, -INFINITY));
+  const float above = emf_above(min_depth);
   // Range sigma at the centre's depth: sigma_depth + sigma_depth_per_m2 z^2.
   const float16 sigma_r = sigma_depth + sigma_depth_per_m2 * (centre_valid ? d0 * d0 : 0.0f);
   const float16 inv_two_sigma_r_sq = 0.5f / (sigma_r * sigma_r);
   float16 sum_w = 0.0f;
   float16 sum_wd = 0.0f;
-  int16 hole = 0;  // a pixel of the window (inside the image) without usable depth
+  int16 hole = 0;
   for (int dv = -PRE_RADIUS; dv <= PRE_RADIUS; ++dv) {
     const int vv = v + dv;
     if (vv < 0 || vv >= height) continue;
     __global const float* row = depth_in + vv * width;
     for (int du = -PRE_RADIUS; du <= PRE_RADIUS; ++du) {
-      const float16 d = emf_load16(row, u0 + du, width);
+      const float16 d = emf_load16(row, u0 + du, step, width);
       const int16 use = (d > above) & (d <= max_depth);
-      const int16 col = u0 + du + lane;
+      const int16 col = u0 + du + lane * step;
       hole |= (col >= 0) & (col < width) & !use;
       const float16 dd = d - d0;
       const float16 w = emf_exp_neg16(-(float)(du * du + dv * dv) * inv_two_sigma_space_sq -
@@ -129,15 +140,41 @@ __kernel void preprocess_depth(__global const float* depth_in, __global float* d
       sum_wd += use ? w * d : 0.0f;
     }
   }
-  // The centre always contributes weight 1 when valid, so sum_w >= 1 there. The range guard
-  // drops pixels whose filtered depth is beyond guard_max_depth (INFINITY: off) and that have a
-  // hole in their window (a surface cut by a range limit is riddled with them).
-  const float16 filtered = sum_wd / sum_w;
+  *hole_out = hole;
+  // The centre always contributes weight 1 when valid, so sum_w >= 1 there.
+  return centre_valid ? sum_wd / sum_w : NAN;
+}
+
+// preprocess_depth: the pixels (u, v) with u and v multiples of PRE_STRIDE (all of them at
+// stride 1), 16 per work item: lane l of item (gx, gy) is pixel (PRE_STRIDE (16 gx + l),
+// PRE_STRIDE gy). Global size: (ceil(ceil(width / PRE_STRIDE) / 16), ceil(height / PRE_STRIDE)).
+// The other pixels' filtered depth and vertex are not written (the host keeps them invalid);
+// with a stride the guarded depth (write_guarded) is preprocess_guard's, for every pixel.
+// The range guard drops a valid pixel whose filtered depth is beyond guard_max_depth (INFINITY:
+// off) and that has a hole in its window (a surface cut by a range limit is riddled with them).
+__kernel void preprocess_depth(__global const float* depth_in, __global float* depth_out,
+                               __global float4* vertex, const int width, const int height,
+                               const float inv_two_sigma_space_sq, const float sigma_depth,
+                               const float sigma_depth_per_m2, const float min_depth,
+                               const float max_depth, const float fx, const float fy,
+                               const float cx, const float cy, const float guard_max_depth,
+                               __global float* guarded, const int write_guarded) {
+  const int u0 = get_global_id(0) * 16 * PRE_STRIDE;
+  const int v = get_global_id(1) * PRE_STRIDE;
+  if (u0 >= width || v >= height) return;
+  const int16 lane = (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  const float16 d0 = emf_load16(depth_in + v * width, u0, PRE_STRIDE, width);
+  int16 hole;
+  const float16 filtered =
+      emf_bilateral16(depth_in, width, height, u0, v, PRE_STRIDE, d0, inv_two_sigma_space_sq,
+                      sigma_depth, sigma_depth_per_m2, min_depth, max_depth, &hole);
+  const int16 centre_valid = emf_in_range16(d0, min_depth, max_depth);
   const int16 guard_drop = centre_valid & hole & !(filtered <= guard_max_depth);
   const float16 z = (centre_valid & !guard_drop) ? filtered : NAN;
-  const float16 x = (convert_float16(u0 + lane) - cx) / fx * z;
+  const float16 x = (convert_float16(u0 + lane * PRE_STRIDE) - cx) / fx * z;
   const float y = ((float)v - cy) / fy;
   const int i0 = v * width + u0;
+#if PRE_STRIDE == 1
   if (u0 + 15 < width) vstore16(z, 0, depth_out + i0);
   // The depth the map integrates: the input, without the pixels the guard dropped.
   const float16 kept = guard_drop ? NAN : d0;
@@ -149,6 +186,96 @@ __kernel void preprocess_depth(__global const float* depth_in, __global float* d
     vertex[i0 + 0x##l] = isnan(z.s##l) ? (float4)(NAN, NAN, NAN, 0.0f)               \
                                        : (float4)(x.s##l, y * z.s##l, z.s##l, 1.0f); \
   }
+#else
+  (void)guarded;  // preprocess_guard writes it for every pixel
+  (void)write_guarded;
+#define EMF_PRE_STORE(l)                                                                          \
+  if (u0 + 0x##l * PRE_STRIDE < width) {                                                          \
+    depth_out[i0 + 0x##l * PRE_STRIDE] = z.s##l;                                                  \
+    vertex[i0 + 0x##l * PRE_STRIDE] = isnan(z.s##l) ? (float4)(NAN, NAN, NAN, 0.0f)               \
+                                                    : (float4)(x.s##l, y * z.s##l, z.s##l, 1.0f); \
+  }
+#endif
   EMF_PRE_LANES16(EMF_PRE_STORE)
 #undef EMF_PRE_STORE
+}
+
+/// The range guard alone at every pixel, for preprocess_depth with a stride, in two separable
+/// passes (16 pixels per work item, global size (ceil(width / 16), height) each).
+/// preprocess_guard_rows: per pixel, over its window's row (the 2 PRE_RADIUS + 1 pixels around
+/// it), the largest usable depth m (0 without any) and whether a pixel inside the image lacks
+/// usable depth: row_max = m, or -1 - m with such a hole.
+__kernel void preprocess_guard_rows(__global const float* depth_in, __global float* row_max,
+                                    const int width, const int height, const float min_depth,
+                                    const float max_depth) {
+  const int u0 = get_global_id(0) * 16;
+  const int v = get_global_id(1);
+  if (u0 >= width || v >= height) return;
+  const int16 lane = (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  const float above = emf_above(min_depth);
+  __global const float* row = depth_in + v * width;
+  int16 hole = 0;
+  float16 largest = 0.0f;
+  for (int du = -PRE_RADIUS; du <= PRE_RADIUS; ++du) {
+    const float16 d = emf_load16(row, u0 + du, 1, width);
+    const int16 use = (d > above) & (d <= max_depth);
+    const int16 col = u0 + du + lane;
+    hole |= (col >= 0) & (col < width) & !use;
+    largest = use ? fmax(largest, d) : largest;
+  }
+  const float16 out = hole ? -1.0f - largest : largest;
+  if (u0 + 15 < width) {
+    vstore16(out, 0, row_max + v * width + u0);
+    return;
+  }
+#define EMF_ROWS_STORE(l) \
+  if (u0 + 0x##l < width) row_max[v * width + u0 + 0x##l] = out.s##l;
+  EMF_PRE_LANES16(EMF_ROWS_STORE)
+#undef EMF_ROWS_STORE
+}
+
+/// preprocess_guard: the window's hole and largest usable depth from the rows of row_max above
+/// and below; `guarded` receives the input with NaN where the guard drops the pixel, as
+/// preprocess_depth at stride 1 writes it. The filtered depth is a weighted mean of the window's
+/// usable depths, so it cannot pass guard_max_depth unless their largest does (1e-4 allows for
+/// the mean's rounding and row_max's encoding): the filter runs only on the items where a valid
+/// lane with a hole in its window has such a neighbour.
+__kernel void preprocess_guard(__global const float* depth_in, __global const float* row_max,
+                               __global float* guarded, const int width, const int height,
+                               const float inv_two_sigma_space_sq, const float sigma_depth,
+                               const float sigma_depth_per_m2, const float min_depth,
+                               const float max_depth, const float guard_max_depth) {
+  const int u0 = get_global_id(0) * 16;
+  const int v = get_global_id(1);
+  if (u0 >= width || v >= height) return;
+  const float16 d0 = emf_load16(depth_in + v * width, u0, 1, width);
+  const int16 centre_valid = emf_in_range16(d0, min_depth, max_depth);
+  int16 hole = 0;
+  float16 largest = 0.0f;
+  for (int dv = -PRE_RADIUS; dv <= PRE_RADIUS; ++dv) {
+    const int vv = v + dv;
+    if (vv < 0 || vv >= height) continue;
+    // Lanes beyond the row read NaN: no hole, no depth (their pixels are not stored).
+    const float16 r = emf_load16(row_max + vv * width, u0, 1, width);
+    hole |= r < 0.0f;
+    largest = fmax(largest, r < 0.0f ? -1.0f - r : r);
+  }
+  const int16 maybe = centre_valid & hole & (largest * 1.0001f > guard_max_depth);
+  int16 guard_drop = 0;
+  if (any(maybe)) {
+    int16 hole_again;
+    const float16 filtered =
+        emf_bilateral16(depth_in, width, height, u0, v, 1, d0, inv_two_sigma_space_sq, sigma_depth,
+                        sigma_depth_per_m2, min_depth, max_depth, &hole_again);
+    guard_drop = maybe & !(filtered <= guard_max_depth);
+  }
+  const float16 kept = guard_drop ? NAN : d0;
+  if (u0 + 15 < width) {
+    vstore16(kept, 0, guarded + v * width + u0);
+    return;
+  }
+#define EMF_GUARD_STORE(l) \
+  if (u0 + 0x##l < width) guarded[v * width + u0 + 0x##l] = kept.s##l;
+  EMF_PRE_LANES16(EMF_GUARD_STORE)
+#undef EMF_GUARD_STORE
 }

@@ -11,6 +11,16 @@
 #include "map/volume_host_access.h"
 
 namespace emf::pipeline {
+namespace {
+
+/// The camera's vertex map is read only by the camera tracker, at every track.pixel_stride-th
+/// pixel (coarse levels at multiples of it), unless the objects share it (objects.filter_depth):
+/// the filter skips the other pixels.
+int cameraSampleStride(const Config& config) {
+  return config.objects.filter_depth ? 1 : std::max(1, config.track.pixel_stride);
+}
+
+}  // namespace
 
 const std::vector<std::string>& SlamSystem::stageNames() {
   static const std::vector<std::string> kStages = {
@@ -24,7 +34,7 @@ SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const core::Intri
       config_(config),
       intrinsics_(core::checkedIntrinsics(intrinsics)),
       pool_(std::make_unique<map::VoxelPool>(ctx, config.map)),
-      preprocessor_(ctx, config.preprocess, intrinsics),
+      preprocessor_(ctx, config.preprocess, intrinsics, cameraSampleStride(config)),
       tracker_(ctx, config.track, intrinsics.width, intrinsics.height),
       estep_(ctx, config.em, intrinsics.width, intrinsics.height, 1 + config.objects.max_objects),
       timer_(stageNames(), 4096),

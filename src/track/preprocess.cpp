@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "common/error.h"
 
@@ -153,13 +155,23 @@ PreprocessedFrame preprocessReference(const cv::Mat& input_m, const core::Intrin
 }
 
 Preprocessor::Preprocessor(cl::Context& ctx, const PreprocessOptions& options,
-                           const core::Intrinsics& intrinsics)
-    : ctx_(ctx), options_(options), intrinsics_(intrinsics) {
+                           const core::Intrinsics& intrinsics, int sample_stride)
+    : ctx_(ctx), options_(options), intrinsics_(intrinsics), stride_(sample_stride) {
   checkIntrinsics(intrinsics_);
   validatePreprocessOptions(options_);
+  if (stride_ < 1) {
+    throw InvalidArgument("Preprocessor: sample stride " + std::to_string(stride_) +
+                          " must be >= 1");
+  }
   const size_t n = static_cast<size_t>(intrinsics_.width) * intrinsics_.height;
+  const std::string radius = "-DPRE_RADIUS=" + std::to_string(options_.bilateral_radius_px);
   kernel_ = ctx_.kernel("preprocess", "preprocess_depth",
-                        "-DPRE_RADIUS=" + std::to_string(options_.bilateral_radius_px));
+                        radius + " -DPRE_STRIDE=" + std::to_string(stride_));
+  if (stride_ > 1 && options_.range_guard_per_m2 > 0) {
+    guard_rows_kernel_ = ctx_.kernel("preprocess", "preprocess_guard_rows", radius);
+    guard_kernel_ = ctx_.kernel("preprocess", "preprocess_guard", radius);
+    row_max_ = ctx_.buffer(CL_MEM_READ_WRITE, n * sizeof(float));
+  }
   if (options_.hole_margin_px > 0) {
     margin_kernel_ = ctx_.kernel("preprocess", "drop_hole_margin",
                                  "-DPRE_RADIUS=" + std::to_string(options_.bilateral_radius_px));
@@ -169,6 +181,15 @@ Preprocessor::Preprocessor(cl::Context& ctx, const PreprocessOptions& options,
   input_ = ctx_.buffer(CL_MEM_READ_ONLY, n * sizeof(float));
   filtered_ = ctx_.buffer(CL_MEM_READ_WRITE, n * sizeof(float));
   vertex_ = ctx_.buffer(CL_MEM_READ_WRITE, n * 4 * sizeof(float));
+  if (stride_ > 1) {
+    // The pixels the kernel skips stay invalid from here on.
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const std::vector<float> depth(n, nan);
+    ctx_.write(filtered_, depth.data(), n * sizeof(float));
+    std::vector<float> vertex(n * 4, nan);
+    for (size_t i = 0; i < n; ++i) vertex[4 * i + 3] = 0.0f;
+    ctx_.write(vertex_, vertex.data(), n * 4 * sizeof(float));
+  }
 }
 
 void Preprocessor::process(const cv::Mat& depth_m) {
@@ -200,17 +221,33 @@ void Preprocessor::process(cl_mem input_m, float frame_max_m) {
     depth_m = margin_.get();
   }
   const float inv_s = static_cast<float>(1.0 / (2.0 * o.sigma_space_px * o.sigma_space_px));
+  const float guard_max = rangeGuardMaxDepth(o, frame_max_m);
+  const bool guard = o.range_guard_per_m2 > 0;
   cl::setArgs(kernel_, depth_m, filtered_.get(), vertex_.get(), intrinsics_.width,
               intrinsics_.height, inv_s, static_cast<float>(o.sigma_depth_m),
               static_cast<float>(o.sigma_depth_per_m2), static_cast<float>(o.min_depth_m),
               static_cast<float>(o.max_depth_m), static_cast<float>(intrinsics_.fx),
               static_cast<float>(intrinsics_.fy), static_cast<float>(intrinsics_.cx),
-              static_cast<float>(intrinsics_.cy), rangeGuardMaxDepth(o, frame_max_m),
-              o.range_guard_per_m2 > 0 ? guarded_.get() : filtered_.get(),
-              o.range_guard_per_m2 > 0 ? 1 : 0);
-  // Sixteen pixels per work item along x.
-  cl::enqueue(ctx_.queue(), kernel_, static_cast<size_t>((intrinsics_.width + 15) / 16),
-              static_cast<size_t>(intrinsics_.height), 0, 8, 8);
+              static_cast<float>(intrinsics_.cy), guard_max,
+              guard ? guarded_.get() : filtered_.get(), guard && stride_ == 1 ? 1 : 0);
+  // Sixteen sampled pixels per work item along x.
+  const int sampled_w = (intrinsics_.width + stride_ - 1) / stride_;
+  const int sampled_h = (intrinsics_.height + stride_ - 1) / stride_;
+  cl::enqueue(ctx_.queue(), kernel_, static_cast<size_t>((sampled_w + 15) / 16),
+              static_cast<size_t>(sampled_h), 0, 8, 8);
+  if (guard_kernel_) {
+    const size_t items_x = static_cast<size_t>((intrinsics_.width + 15) / 16);
+    cl::setArgs(guard_rows_kernel_, depth_m, row_max_.get(), intrinsics_.width, intrinsics_.height,
+                static_cast<float>(o.min_depth_m), static_cast<float>(o.max_depth_m));
+    cl::enqueue(ctx_.queue(), guard_rows_kernel_, items_x, static_cast<size_t>(intrinsics_.height),
+                0, 8, 8);
+    cl::setArgs(guard_kernel_, depth_m, row_max_.get(), guarded_.get(), intrinsics_.width,
+                intrinsics_.height, inv_s, static_cast<float>(o.sigma_depth_m),
+                static_cast<float>(o.sigma_depth_per_m2), static_cast<float>(o.min_depth_m),
+                static_cast<float>(o.max_depth_m), guard_max);
+    cl::enqueue(ctx_.queue(), guard_kernel_, items_x, static_cast<size_t>(intrinsics_.height), 0, 8,
+                8);
+  }
 }
 
 PreprocessedFrame Preprocessor::download() const {

@@ -43,11 +43,18 @@ void validatePreprocessOptions(const PreprocessOptions& options);
 
 /// Device preprocessing for one image size. Buffers are allocated once at construction; run()
 /// only enqueues work (nothing is allocated per frame).
+///
+/// `sample_stride` s > 1: only the pixels (u, v) with u and v multiples of s get a filtered depth
+/// and a vertex (the same to the bit as at stride 1); the others stay invalid (NaN; vertex w 0).
+/// For a reader that samples no other pixel, such as the camera tracker at its pixel_stride: at
+/// s = 2 a quarter of the filtering. What the map integrates (inputDepth) is decided at every
+/// pixel as at stride 1.
 class Preprocessor {
  public:
-  /// Throws InvalidArgument when the intrinsics are invalid, ConfigError for bad options.
+  /// Throws InvalidArgument when the intrinsics are invalid or sample_stride < 1, ConfigError for
+  /// bad options.
   Preprocessor(cl::Context& ctx, const PreprocessOptions& options,
-               const core::Intrinsics& intrinsics);
+               const core::Intrinsics& intrinsics, int sample_stride = 1);
 
   /// Copies `depth_m` (CV_32F metres, intrinsics' size) into the input buffer and runs the
   /// kernel (the range guard's frame limit from the largest depth of `depth_m`). Throws
@@ -75,12 +82,17 @@ class Preprocessor {
   PreprocessedFrame download() const;
 
   const core::Intrinsics& intrinsics() const { return intrinsics_; }
+  int sampleStride() const { return stride_; }
 
  private:
   cl::Context& ctx_;
   PreprocessOptions options_;
   core::Intrinsics intrinsics_;
+  int stride_;
   cl::KernelHandle kernel_;
+  // Stride > 1 with the range guard: the guard at every pixel, in two separable passes.
+  cl::KernelHandle guard_rows_kernel_, guard_kernel_;
+  cl::MemHandle row_max_;  // the first pass's per-row window maxima and holes
   cl::KernelHandle margin_kernel_;
   cl::MemHandle input_;
   /// The depth the filter reads: the input, or without its hole margin.

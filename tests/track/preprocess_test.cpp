@@ -3,6 +3,7 @@
 #include "track/preprocess.h"
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 
@@ -177,6 +178,75 @@ TEST_F(Preprocess, ConstructedEdgesAndHolesMatchReference) {
     o.range_guard_per_m2 = 0.0;
     EXPECT_LT(valid, compareWithReference(ctx(), depth, k, o)) << guard;
   }
+}
+
+bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof(float)) == 0; }
+
+// A sample stride s: the pixels (u, v) with u, v multiples of s get the stride-1 filtered depth
+// and vertex to the bit, the others stay invalid, and what the map integrates (the range guard
+// at every pixel) is the same to the bit. Returns the number of pixels the guard dropped that
+// the strided filter skips.
+int compareStrided(cl::Context& ctx, const cv::Mat& depth, const core::Intrinsics& k,
+                   const PreprocessOptions& o, int stride) {
+  Preprocessor full(ctx, o, k);
+  full.process(depth);
+  const PreprocessedFrame ref = full.download();
+  Preprocessor strided(ctx, o, k, stride);
+  EXPECT_EQ(strided.sampleStride(), stride);
+  strided.process(depth);
+  const PreprocessedFrame dev = strided.download();
+  int skipped_drops = 0;
+  for (int v = 0; v < k.height; ++v) {
+    for (int u = 0; u < k.width; ++u) {
+      const float r = ref.depth_m.at<float>(v, u), d = dev.depth_m.at<float>(v, u);
+      const cv::Vec4f rv = ref.vertex.at<cv::Vec4f>(v, u), dv = dev.vertex.at<cv::Vec4f>(v, u);
+      const bool sampled = u % stride == 0 && v % stride == 0;
+      const bool same = sampled
+                            ? sameBits(d, r) && sameBits(dv[0], rv[0]) && sameBits(dv[1], rv[1]) &&
+                                  sameBits(dv[2], rv[2]) && sameBits(dv[3], rv[3])
+                            : std::isnan(d) && std::isnan(dv[0]) && dv[3] == 0.0f;
+      const float ri = ref.input_m.at<float>(v, u), di = dev.input_m.at<float>(v, u);
+      if (!same || !sameBits(di, ri)) {
+        ADD_FAILURE() << "stride " << stride << ", pixel (" << u << "," << v << "): depth " << d
+                      << " vs " << r << ", integrated " << di << " vs " << ri;
+        return skipped_drops;
+      }
+      const float raw = depth.at<float>(v, u);
+      if (!sampled && std::isnan(ri) && raw > o.min_depth_m && raw <= o.max_depth_m) {
+        ++skipped_drops;
+      }
+    }
+  }
+  return skipped_drops;
+}
+
+TEST_F(Preprocess, StridedFilterKeepsTheSampledPixelsToTheBit) {
+  const cv::Mat depth =
+      test::readDepthPng(test::dataPath("tum-fr1-xyz-pairs/case_1/dep_prev.png"), 5000.0);
+  PreprocessOptions o;
+  o.range_guard_per_m2 = 0.05;  // drops pixels, as in RealKinectDepthMatchesReference
+  for (const int stride : {2, 3, 4}) {
+    // The guard decides pixels the filter skips: some are dropped.
+    EXPECT_GT(compareStrided(ctx(), depth, test::kinectCamera(), o, stride), 0) << stride;
+  }
+  o.range_guard_per_m2 = 0.0;  // no guard kernel: the integrated depth is the margin's input
+  o.hole_margin_px = 1;
+  compareStrided(ctx(), depth, test::kinectCamera(), o, 2);
+  // Edges of an image whose size is no multiple of the stride or the work-group size.
+  core::Intrinsics k;
+  k.fx = 60;
+  k.fy = 58;
+  k.cx = 33.0;
+  k.cy = 21.5;
+  k.width = 67;
+  k.height = 45;
+  const cv::Mat constructed = constructedDepth(k.width, k.height);
+  o = PreprocessOptions();
+  o.range_guard_per_m2 = 0.1;  // everything beyond 2.5 m next to a hole
+  for (const int stride : {2, 3}) {
+    EXPECT_GT(compareStrided(ctx(), constructed, k, o, stride), 0) << stride;
+  }
+  EXPECT_THROW(Preprocessor(ctx(), o, k, 0), InvalidArgument);
 }
 
 // The hole margin of the reference on a constructed image: the pixels within the margin of a
