@@ -19,6 +19,11 @@ track::TrackOptions objectTrackOptions(const Config& config, int image_width) {
   // often than the background's: the camera's stricter inlier rules would drop good frames.
   o.min_inlier_ratio = std::min(o.min_inlier_ratio, 0.5);
   o.recovery_min_inlier_ratio = o.min_inlier_ratio;
+  // A lost object is tried again from its prediction or its last place while it keeps moving
+  // (a tumble, a spin): within the camera's recovery bound of that start it stayed lost until
+  // retired. Its motion is judged by the bound of every call (docs/method.md#object-tracking).
+  o.recovery_max_motion_m = o.max_motion_m;
+  o.recovery_max_motion_deg = o.max_motion_deg;
   // Objects cover few pixels: all of them are used at the finest level.
   o.pixel_stride = 1;
   // Rotations about the object's own points: the camera is metres away from a small object, and

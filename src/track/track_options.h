@@ -177,7 +177,8 @@ struct TrackOptions {
   /// While recovering after a lost call (see recovery_min_inlier_ratio), lost when the estimate
   /// moved farther than this from the last tracked pose: with no relocalisation, only a camera
   /// back near its last tracked view is re-acquired; LM started from a stale pose converges to
-  /// wrong fits nearby that pass every other rule.
+  /// wrong fits nearby that pass every other rule. Objects use max_motion_* instead
+  /// (pipeline::objectTrackOptions): a lost object may have moved on.
   double recovery_max_motion_m = 0.1;
   double recovery_max_motion_deg = 5.0;
 

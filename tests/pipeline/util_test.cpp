@@ -68,6 +68,10 @@ TEST(ObjectTrackOptions, ObjectsKeepTheirOwnHuberDeltaAndRules) {
   EXPECT_EQ(o.pixel_stride, 1);
   EXPECT_EQ(o.step_acceptance, track::StepAcceptance::kFixedWeights);
   EXPECT_DOUBLE_EQ(o.min_valid_fraction, 0.0);
+  // No recovery bound on the motion beyond every call's: a lost object may have moved on.
+  EXPECT_DOUBLE_EQ(o.recovery_max_motion_m, config.track.max_motion_m);
+  EXPECT_DOUBLE_EQ(o.recovery_max_motion_deg, config.track.max_motion_deg);
+  EXPECT_LT(config.track.recovery_max_motion_deg, config.track.max_motion_deg);  // the camera's
   // The defaults: the camera's tight delta, the objects' the paper's.
   EXPECT_LT(Config{}.track.huber_truncation_factor,
             objectTrackOptions(Config{}, 640).huber_truncation_factor);
