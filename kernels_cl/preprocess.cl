@@ -200,6 +200,19 @@ __kernel void preprocess_depth(__global const float* depth_in, __global float* d
 #undef EMF_PRE_STORE
 }
 
+/// Stores 16 values at row[u0 .. u0 + 15], the lanes inside the row.
+__attribute__((always_inline)) inline void emf_store16(float16 x, __global float* row, int u0,
+                                                       int width) {
+  if (u0 + 15 < width) {
+    vstore16(x, 0, row + u0);
+    return;
+  }
+#define EMF_PRE_STORE16(l) \
+  if (u0 + 0x##l < width) row[u0 + 0x##l] = x.s##l;
+  EMF_PRE_LANES16(EMF_PRE_STORE16)
+#undef EMF_PRE_STORE16
+}
+
 /// The range guard alone at every pixel, for preprocess_depth with a stride, in two separable
 /// passes (16 pixels per work item, global size (ceil(width / 16), height) each).
 /// preprocess_guard_rows: per pixel, over its window's row (the 2 PRE_RADIUS + 1 pixels around
@@ -223,15 +236,7 @@ __kernel void preprocess_guard_rows(__global const float* depth_in, __global flo
     hole |= (col >= 0) & (col < width) & !use;
     largest = use ? fmax(largest, d) : largest;
   }
-  const float16 out = hole ? -1.0f - largest : largest;
-  if (u0 + 15 < width) {
-    vstore16(out, 0, row_max + v * width + u0);
-    return;
-  }
-#define EMF_ROWS_STORE(l) \
-  if (u0 + 0x##l < width) row_max[v * width + u0 + 0x##l] = out.s##l;
-  EMF_PRE_LANES16(EMF_ROWS_STORE)
-#undef EMF_ROWS_STORE
+  emf_store16(hole ? -1.0f - largest : largest, row_max + v * width, u0, width);
 }
 
 /// preprocess_guard: the window's hole and largest usable depth from the rows of row_max above
@@ -269,13 +274,5 @@ __kernel void preprocess_guard(__global const float* depth_in, __global const fl
                         sigma_depth_per_m2, min_depth, max_depth, &hole_again);
     guard_drop = maybe & !(filtered <= guard_max_depth);
   }
-  const float16 kept = guard_drop ? NAN : d0;
-  if (u0 + 15 < width) {
-    vstore16(kept, 0, guarded + v * width + u0);
-    return;
-  }
-#define EMF_GUARD_STORE(l) \
-  if (u0 + 0x##l < width) guarded[v * width + u0 + 0x##l] = kept.s##l;
-  EMF_PRE_LANES16(EMF_GUARD_STORE)
-#undef EMF_GUARD_STORE
+  emf_store16(guard_drop ? NAN : d0, guarded + v * width, u0, width);
 }
