@@ -22,7 +22,9 @@
 // pixel rectangle its grid projects to (outside it the likelihood is 0 exactly); the host keeps
 // its q at 0 outside that rectangle (estep_clear over the part a previous E-step wrote). When
 // the objects and their poses are those of the previous E-step (the frame's second E-step moves
-// only the background), their stored likelihoods are added with estep_accumulate instead. Pixels
+// only the background), their stored likelihoods are added with estep_accumulate instead. The
+// camera's E-step wants only q_0 at the pixels the camera tracker reads: its passes cover every
+// `stride`-th pixel in x and y, and only the background is normalised. Pixels
 // without a valid vertex get q = 0 for every volume and residual NaN; pixels no volume contains
 // also get q = 0.
 #include "map_common.clh"
@@ -36,12 +38,13 @@ typedef struct {
   int pad[3];
 } EStepCover;
 
-/// The likelihood of one volume for 16 consecutive pixels per work item, in float16 lanes
+/// The likelihood of one volume for 16 pixels of a row per work item, in float16 lanes
 /// (explicit SIMD through emf_sample_sdf16 / emf_sample_pfg16, like track_accumulate: PoCL
 /// keeps a per-pixel kernel scalar). Per lane: the formula above, as em::associationLikelihood.
 /// Sixteen pixels none of which falls in the volume skip the sampling. The work items cover the
-/// rectangle `rect` (x0, y0, width, height) of an image `width` pixels wide: item (gx, gy) takes
-/// pixels x0 + 16 gx .. + 15 of row y0 + gy.
+/// grid `rect` (x0, y0, columns, rows) of every `stride`-th pixel of an image `width` pixels
+/// wide: item (gx, gy) takes pixels x0 + stride (16 gx + l), l = 0 .. 15, of row
+/// y0 + stride gy (stride 1: a rectangle of the image).
 __kernel void estep_likelihood16(__global const float4* vertex, const int width, const int4 rect,
                                  const float4 r0, const float4 r1, const float4 r2,
                                  __global const int* index, __global const int* count_index,
@@ -50,21 +53,22 @@ __kernel void estep_likelihood16(__global const float4* vertex, const int width,
                                  const float voxel_size, const float truncation, const float sigma,
                                  const float alpha, const float p_uniform, const float min_weight,
                                  const int pfg_mode, const int first, const EStepCover cover,
-                                 __global float* likelihood, __global float* sum,
+                                 const int stride, __global float* likelihood, __global float* sum,
                                  __global float* best, __global float* residual) {
-  const int gx = get_global_id(0) * 16;  // first lane's column within the rectangle
+  const int gx = get_global_id(0) * 16;  // first lane's column of the grid
   const int gy = get_global_id(1);
   if (gx >= rect.z || gy >= rect.w) return;
-  const int base = (rect.y + gy) * width + rect.x + gx;
-  const int lanes = rect.z - gx;  // lanes l < lanes are inside the rectangle
+  const int col = rect.x + stride * gx, row = rect.y + stride * gy;  // lane 0's pixel
+  const int base = row * width + col;
+  const int lanes = rect.z - gx;  // lanes l < lanes are inside the grid
   float16 px, py, pz, pw;
-#define ESTEP_LOAD(l)                                      \
-  {                                                        \
-    const float4 p = vertex[base + min(0x##l, lanes - 1)]; \
-    px.s##l = p.x;                                         \
-    py.s##l = p.y;                                         \
-    pz.s##l = p.z;                                         \
-    pw.s##l = p.w;                                         \
+#define ESTEP_LOAD(l)                                               \
+  {                                                                 \
+    const float4 p = vertex[base + stride * min(0x##l, lanes - 1)]; \
+    px.s##l = p.x;                                                  \
+    py.s##l = p.y;                                                  \
+    pz.s##l = p.z;                                                  \
+    pw.s##l = p.w;                                                  \
   }
   EMF_LANES16(ESTEP_LOAD)
 #undef ESTEP_LOAD
@@ -79,10 +83,9 @@ __kernel void estep_likelihood16(__global const float4* vertex, const int width,
                        (z >= claim_lo.z) & (x < claim_hi.x) & (y < claim_hi.y) & (z < claim_hi.z);
   // The first volume (background) outside every object rectangle: only "inside" matters.
   int exact = !first || cover.count < 0;
-  const int col = rect.x + gx, row = rect.y + gy;
   for (int r = 0; r < min(cover.count, EMF_ESTEP_COVER_RECTS) && !exact; ++r) {
     const int4 c = cover.rects[r];
-    exact = row >= c.y && row < c.y + c.w && col < c.x + c.z && col + 16 > c.x;
+    exact = row >= c.y && row < c.y + c.w && col < c.x + c.z && col + 15 * stride >= c.x;
   }
   float16 lik = 0.0f;
   float16 abs_psi = NAN;
@@ -103,7 +106,7 @@ __kernel void estep_likelihood16(__global const float4* vertex, const int width,
   }
 #define ESTEP_STORE(l)                            \
   if (0x##l < lanes) {                            \
-    const int u = base + 0x##l;                   \
+    const int u = base + stride * 0x##l;          \
     const float lk = lik.s##l, ap = abs_psi.s##l; \
     likelihood[u] = lk;                           \
     if (pfg_mode) {                               \
@@ -129,15 +132,16 @@ __kernel void estep_likelihood16(__global const float4* vertex, const int width,
 #undef ESTEP_STORE
 }
 
-/// q_i(u) = likelihood_i(u) / sum(u) (0 where the sum is 0) over the rectangle `rect`
-/// (x0, y0, width, height; one work item per pixel). pfg_mode: objects keep their p_fg, the
-/// background (is_background) gets its own value times 1 - max object p_fg.
+/// q_i(u) = likelihood_i(u) / sum(u) (0 where the sum is 0) over the grid `rect` (x0, y0,
+/// columns, rows) of every `stride`-th pixel, one work item per pixel (as estep_likelihood16).
+/// pfg_mode: objects keep their p_fg, the background (is_background) gets its own value times
+/// 1 - max object p_fg.
 __kernel void estep_normalize(__global float* q, __global const float* likelihood,
                               __global const float* sum, const int width, const int4 rect,
-                              const int pfg_mode, const int is_background) {
+                              const int pfg_mode, const int is_background, const int stride) {
   const int x = get_global_id(0), y = get_global_id(1);
   if (x >= rect.z || y >= rect.w) return;
-  const int u = (rect.y + y) * width + rect.x + x;
+  const int u = (rect.y + stride * y) * width + rect.x + stride * x;
   const float s = sum[u];
   const float lk = likelihood[u];
   if (pfg_mode) {

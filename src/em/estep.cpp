@@ -114,9 +114,6 @@ EStep::EStep(cl::Context& ctx, const EmOptions& options, int width, int height, 
   last_objects_.reserve(q_.size());
 }
 
-namespace {
-cl_int4 rectArg(const cv::Rect& r) { return {{r.x, r.y, r.width, r.height}}; }
-
 // The background pass's object rectangles (kernels_cl/estep.cl EStepCover).
 constexpr int kCoverRects = 8;
 struct EStepCover {
@@ -125,6 +122,9 @@ struct EStepCover {
   cl_int pad[3];
 };
 static_assert(sizeof(EStepCover) == 144, "layout of kernels_cl/estep.cl EStepCover");
+
+namespace {
+cl_int4 rectArg(const cv::Rect& r) { return {{r.x, r.y, r.width, r.height}}; }
 
 // At most kCoverRects rectangles covering `rects`: while there are more, the pair whose
 // bounding rectangle adds the least area is merged.
@@ -205,39 +205,94 @@ void EStep::compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes,
                   static_cast<size_t>(rect.height), 0, kPixelLocalX, kPixelLocalY);
       continue;
     }
-    const Eigen::Matrix<float, 3, 4> M = poseRows(v.T_volume_camera);
-    cl_float4 rows[3];
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 4; ++c) rows[r].s[c] = M(r, c);
-    }
-    const cl_int4 dims = {
-        {v.view.dims_blocks.x(), v.view.dims_blocks.y(), v.view.dims_blocks.z(), 0}};
-    const cl_int has_counts = v.count_index != nullptr ? 1 : 0;
-    const cl_float4 claim_lo = {{v.claim.lo.x(), v.claim.lo.y(), v.claim.lo.z(), 0.0f}};
-    const cl_float4 claim_hi = {{v.claim.hi.x(), v.claim.hi.y(), v.claim.hi.z(), 0.0f}};
-    // 16 pixels of a row per work item.
-    cl::setArgs(likelihood16_, vertex_map, width_, rectArg(rect), rows[0], rows[1], rows[2],
-                v.view.index, has_counts ? v.count_index : v.view.index, has_counts, dims, claim_lo,
-                claim_hi, v.view.voxels, v.view.voxel_size_m, v.view.truncation_m,
-                static_cast<float>(options_.sigma_m), static_cast<float>(options_.alpha),
-                static_cast<float>(options_.p_uniform), static_cast<float>(options_.min_weight),
-                pfg_mode, static_cast<cl_int>(i == 0 ? 1 : 0), cover, likelihood_[i].get(),
-                sum_.get(), best_.get(), residual_.get());
-    cl::enqueue(ctx_.queue(), likelihood16_, static_cast<size_t>((rect.width + 15) / 16),
-                static_cast<size_t>(rect.height), 0, kLikelihoodLocalX, kLikelihoodLocalY);
+    enqueueLikelihood(vertex_map, v, static_cast<int>(i), rect, cover, 1);
   }
   for (size_t i = 0; i < volumes.size(); ++i) {
-    const cv::Rect& rect = rects[i];
-    if (rect.empty()) continue;
-    cl::setArgs(normalize_, q_[i].get(), likelihood_[i].get(), sum_.get(), width_, rectArg(rect),
-                pfg_mode, static_cast<cl_int>(i == 0 ? 1 : 0));
-    cl::enqueue(ctx_.queue(), normalize_, static_cast<size_t>(rect.width),
-                static_cast<size_t>(rect.height), 0, kPixelLocalX, kPixelLocalY);
+    if (!rects[i].empty()) enqueueNormalize(static_cast<int>(i), rects[i], 1);
   }
   count_ = static_cast<int>(volumes.size());
   last_objects_.swap(keys_);
   last_vertex_ = vertex_map;
   reused_ = reuse;
+}
+
+void EStep::enqueueLikelihood(cl_mem vertex_map, const EStepVolume& v, int i, const cv::Rect& grid,
+                              const EStepCover& cover, int stride) {
+  const Eigen::Matrix<float, 3, 4> M = poseRows(v.T_volume_camera);
+  cl_float4 rows[3];
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 4; ++c) rows[r].s[c] = M(r, c);
+  }
+  const cl_int4 dims = {
+      {v.view.dims_blocks.x(), v.view.dims_blocks.y(), v.view.dims_blocks.z(), 0}};
+  const cl_int has_counts = v.count_index != nullptr ? 1 : 0;
+  const cl_float4 claim_lo = {{v.claim.lo.x(), v.claim.lo.y(), v.claim.lo.z(), 0.0f}};
+  const cl_float4 claim_hi = {{v.claim.hi.x(), v.claim.hi.y(), v.claim.hi.z(), 0.0f}};
+  const cl_int pfg_mode = options_.association == Association::kPfg ? 1 : 0;
+  // 16 pixels of a row per work item.
+  cl::setArgs(likelihood16_, vertex_map, width_, rectArg(grid), rows[0], rows[1], rows[2],
+              v.view.index, has_counts ? v.count_index : v.view.index, has_counts, dims, claim_lo,
+              claim_hi, v.view.voxels, v.view.voxel_size_m, v.view.truncation_m,
+              static_cast<float>(options_.sigma_m), static_cast<float>(options_.alpha),
+              static_cast<float>(options_.p_uniform), static_cast<float>(options_.min_weight),
+              pfg_mode, static_cast<cl_int>(i == 0 ? 1 : 0), cover, static_cast<cl_int>(stride),
+              likelihood_[static_cast<size_t>(i)].get(), sum_.get(), best_.get(), residual_.get());
+  cl::enqueue(ctx_.queue(), likelihood16_, static_cast<size_t>((grid.width + 15) / 16),
+              static_cast<size_t>(grid.height), 0, kLikelihoodLocalX, kLikelihoodLocalY);
+}
+
+void EStep::enqueueNormalize(int i, const cv::Rect& grid, int stride) {
+  const cl_int pfg_mode = options_.association == Association::kPfg ? 1 : 0;
+  cl::setArgs(normalize_, q_[static_cast<size_t>(i)].get(),
+              likelihood_[static_cast<size_t>(i)].get(), sum_.get(), width_, rectArg(grid),
+              pfg_mode, static_cast<cl_int>(i == 0 ? 1 : 0), static_cast<cl_int>(stride));
+  cl::enqueue(ctx_.queue(), normalize_, static_cast<size_t>(grid.width),
+              static_cast<size_t>(grid.height), 0, kPixelLocalX, kPixelLocalY);
+}
+
+void EStep::computeBackgroundWeights(cl_mem vertex_map, const std::vector<EStepVolume>& volumes,
+                                     int stride) {
+  if (volumes.empty() || volumes.size() > q_.size() || stride < 1) {
+    throw InvalidArgument("EStep::computeBackgroundWeights: " + std::to_string(volumes.size()) +
+                          " volumes (capacity " + std::to_string(q_.size()) + "), stride " +
+                          std::to_string(stride));
+  }
+  const cv::Rect image(0, 0, width_, height_);
+  // The sampled grid of a pixel rectangle: its pixels whose coordinates are multiples of the
+  // stride, as (first pixel x, y, columns, rows).
+  const auto grid = [stride](const cv::Rect& r) {
+    const auto first = [stride](int x) { return (x + stride - 1) / stride; };
+    const int c0 = first(r.x), c1 = first(r.x + r.width);
+    const int r0 = first(r.y), r1 = first(r.y + r.height);
+    return cv::Rect(c0 * stride, r0 * stride, std::max(0, c1 - c0), std::max(0, r1 - r0));
+  };
+  rects_.assign(volumes.size(), image);
+  keys_.clear();
+  for (size_t i = 1; i < volumes.size(); ++i) {
+    const EStepVolume& v = volumes[i];
+    if (v.pixels) rects_[i] = *v.pixels & image;
+    keys_.push_back({v.view.index, v.count_index, v.view.voxels, poseRows(v.T_volume_camera),
+                     v.claim.lo, v.claim.hi, rects_[i]});
+  }
+  const EStepCover cover = coverOf(std::vector<cv::Rect>(rects_.begin() + 1, rects_.end()));
+  for (size_t i = 0; i < volumes.size(); ++i) {
+    const cv::Rect g = grid(rects_[i]);
+    if (!g.empty())
+      enqueueLikelihood(vertex_map, volumes[i], static_cast<int>(i), g, cover, stride);
+  }
+  enqueueNormalize(0, grid(image), stride);
+  // At stride 1 the objects' likelihoods are whole, as compute() leaves them: the next compute()
+  // may reuse them. Otherwise their buffers hold a mix of this call's sampled pixels and older
+  // ones: the next compute() samples them again. Their q is untouched.
+  if (stride == 1) {
+    last_objects_.swap(keys_);
+    last_vertex_ = vertex_map;
+  } else {
+    last_objects_.clear();
+    last_vertex_ = nullptr;
+  }
+  reused_ = false;
+  count_ = 1;
 }
 
 cv::Mat EStep::downloadQ(int i) const {

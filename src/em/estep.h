@@ -19,6 +19,8 @@
 
 namespace emf::em {
 
+struct EStepCover;  // estep.cpp: the object rectangles the background pass samples exactly
+
 /// A claim region that bounds nothing.
 constexpr float kUnboundedClaim = 1e30f;
 
@@ -86,6 +88,15 @@ class EStep {
   /// Whether the last compute() reused the objects' likelihoods (tests).
   bool reusedObjects() const { return reused_; }
 
+  /// q of the background alone, at the pixels whose x and y are multiples of `stride` (the
+  /// camera tracker's samples at its track.pixel_stride): there it equals compute()'s q(0) to the
+  /// bit; elsewhere q(0) is unspecified, and the objects' q keep what compute() gave them. A next
+  /// compute() with `same_objects` reuses the objects' likelihoods only after stride 1 (at a
+  /// larger stride they were sampled at the stride's pixels alone). Enqueues only. Throws
+  /// InvalidArgument for too many volumes or a stride below 1.
+  void computeBackgroundWeights(cl_mem vertex_map, const std::vector<EStepVolume>& volumes,
+                                int stride);
+
   /// q of volume i of the last compute() (float per pixel).
   const cl::MemHandle& q(int i) const { return q_.at(static_cast<size_t>(i)); }
   /// |psi| of the best-associated volume per pixel (float, NaN = none) after a compute() with
@@ -102,6 +113,12 @@ class EStep {
   cv::Mat downloadResidual() const;
 
  private:
+  // One likelihood pass of volume i (0 = the background) over `grid` (first pixel x, y,
+  // columns, rows of every stride-th pixel), and q_i's normalisation over one.
+  void enqueueLikelihood(cl_mem vertex_map, const EStepVolume& v, int i, const cv::Rect& grid,
+                         const EStepCover& cover, int stride);
+  void enqueueNormalize(int i, const cv::Rect& grid, int stride);
+
   cl::Context& ctx_;
   EmOptions options_;
   int width_, height_;

@@ -103,6 +103,7 @@ void ObjectLifecycle::setCamera(const Eigen::Isometry3d& T_world_camera,
 
 void ObjectLifecycle::markAllLost() {
   for (auto& o : objects_) o.state = ObjectState::kLost;
+  estep_ids_.clear();  // the camera's E-step gave the background's weights only: none to show
 }
 
 cv::Mat ObjectLifecycle::downloadVertexMap() const {

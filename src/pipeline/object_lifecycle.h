@@ -162,7 +162,8 @@ class ObjectLifecycle {
   /// `residual_everywhere`: the E-step's residual is wanted (the detector's feedback of this
   /// frame reads it; em::EStep::compute).
   void track(const std::vector<Eigen::Isometry3d>& T_oc_predicted, bool residual_everywhere);
-  /// The camera was lost: every object is lost this frame.
+  /// The camera was lost: every object is lost this frame, and the frame has no E-step
+  /// (eStepIds() empty).
   void markAllLost();
   /// Detection frame, before integration: match (ray-cast masks, IoU), existence counts,
   /// foreground masks of the matched objects, growth. Keeps the unmatched detections.

@@ -117,9 +117,10 @@ FrameOutcome SlamSystem::process(const core::Frame& frame,
     const bool with_objects = !objects_->empty();
     if (with_objects) {
       ScopedStage s(timer_, "estep");
-      // The camera's weights: q_0 only, no residual.
-      estep_.compute(objects_->vertexMap(),
-                     objects_->eStepVolumes(T_world_predicted, T_oc_predicted), false);
+      // The camera's weights: q_0 only, at the pixels the camera tracker reads.
+      estep_.computeBackgroundWeights(objects_->vertexMap(),
+                                      objects_->eStepVolumes(T_world_predicted, T_oc_predicted),
+                                      std::max(1, config_.track.pixel_stride));
       ctx_.finish();
     }
     {

@@ -377,6 +377,41 @@ TEST_P(EStepModes, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
     EXPECT_FALSE(estep.reusedObjects());
     EXPECT_TRUE(sameBits(estep.downloadQ(2), q2_moved));
   }
+  // The camera's E-step: the background's weights alone at every pixel / 2nd / 3rd pixel equal
+  // the whole E-step's q_0 there to the bit; the objects' q are untouched, and the next
+  // compute() reuses the objects' likelihoods after stride 1 only (at 2 and 3 they were
+  // overwritten in part), with the same q either way.
+  {
+    const std::vector<EStepVolume> volumes = {
+        {d_bg.view, nullptr, host[0].T_volume_camera, {}, {}},
+        {d_1.view, c_1.get(), host[1].T_volume_camera, {}, px_1},
+        {d_2.view, c_2.get(), host[2].T_volume_camera, {}, px_2}};
+    estep.compute(d_vertex.get(), volumes, false, false);
+    std::vector<cv::Mat> q_full;
+    for (int i = 0; i < 3; ++i) q_full.push_back(estep.downloadQ(i));
+    for (int stride : {1, 2, 3}) {
+      SCOPED_TRACE("stride " + std::to_string(stride));
+      estep.computeBackgroundWeights(d_vertex.get(), volumes, stride);
+      const cv::Mat q0_strided = estep.downloadQ(0);
+      int same = 0, other = 0;
+      for (int v = 0; v < k.height; v += stride) {
+        for (int u = 0; u < k.width; u += stride) {
+          const float a = q0_strided.at<float>(v, u), b = q_full[0].at<float>(v, u);
+          (std::memcmp(&a, &b, sizeof(float)) == 0 ? same : other)++;
+        }
+      }
+      EXPECT_EQ(other, 0);
+      EXPECT_EQ(same, ((k.width + stride - 1) / stride) * ((k.height + stride - 1) / stride));
+      EXPECT_TRUE(sameBits(estep.downloadQ(1), q_full[1]));
+      EXPECT_TRUE(sameBits(estep.downloadQ(2), q_full[2]));
+      estep.compute(d_vertex.get(), volumes, false, true);
+      EXPECT_EQ(estep.reusedObjects(), stride == 1);
+      for (int i = 0; i < 3; ++i) {
+        EXPECT_TRUE(sameBits(estep.downloadQ(i), q_full[static_cast<size_t>(i)])) << "volume " << i;
+      }
+    }
+    EXPECT_THROW(estep.computeBackgroundWeights(d_vertex.get(), volumes, 0), InvalidArgument);
+  }
   // A band of rows of q, as the visibility rule downloads it.
   {
     const cv::Mat whole = estep.downloadQ(1);
