@@ -277,8 +277,9 @@ void EStep::computeBackgroundWeights(cl_mem vertex_map, const std::vector<EStepV
   const EStepCover cover = coverOf(std::vector<cv::Rect>(rects_.begin() + 1, rects_.end()));
   for (size_t i = 0; i < volumes.size(); ++i) {
     const cv::Rect g = grid(rects_[i]);
-    if (!g.empty())
+    if (!g.empty()) {
       enqueueLikelihood(vertex_map, volumes[i], static_cast<int>(i), g, cover, stride);
+    }
   }
   enqueueNormalize(0, grid(image), stride);
   // At stride 1 the objects' likelihoods are whole, as compute() leaves them: the next compute()

@@ -102,7 +102,7 @@ class EStep {
   /// |psi| of the best-associated volume per pixel (float, NaN = none) after a compute() with
   /// residual_everywhere.
   const cl::MemHandle& residual() const { return residual_; }
-  /// Number of volumes of the last compute().
+  /// Number of volumes whose q the last call gave (1 after computeBackgroundWeights()).
   int volumeCount() const { return count_; }
   int maxVolumes() const { return static_cast<int>(q_.size()); }
 
