@@ -168,16 +168,8 @@ void EStep::compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes,
                           " volumes, capacity " + std::to_string(q_.size()));
   }
   const cl_int pfg_mode = options_.association == Association::kPfg ? 1 : 0;
-  const cv::Rect image(0, 0, width_, height_);
-  std::vector<cv::Rect>& rects = rects_;
-  rects.assign(volumes.size(), image);
-  keys_.clear();
-  for (size_t i = 1; i < volumes.size(); ++i) {
-    const EStepVolume& v = volumes[i];
-    if (v.pixels) rects[i] = *v.pixels & image;
-    keys_.push_back({v.view.index, v.count_index, v.view.voxels, poseRows(v.T_volume_camera),
-                     v.claim.lo, v.claim.hi, rects[i]});
-  }
+  setRectsAndKeys(volumes);
+  const std::vector<cv::Rect>& rects = rects_;
   // The objects' likelihoods of the last call still hold: add them instead of sampling again.
   const bool reuse =
       same_objects && !residual_everywhere && vertex_map == last_vertex_ && keys_ == last_objects_;
@@ -214,6 +206,18 @@ void EStep::compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes,
   last_objects_.swap(keys_);
   last_vertex_ = vertex_map;
   reused_ = reuse;
+}
+
+void EStep::setRectsAndKeys(const std::vector<EStepVolume>& volumes) {
+  const cv::Rect image(0, 0, width_, height_);
+  rects_.assign(volumes.size(), image);
+  keys_.clear();
+  for (size_t i = 1; i < volumes.size(); ++i) {
+    const EStepVolume& v = volumes[i];
+    if (v.pixels) rects_[i] = *v.pixels & image;
+    keys_.push_back({v.view.index, v.count_index, v.view.voxels, poseRows(v.T_volume_camera),
+                     v.claim.lo, v.claim.hi, rects_[i]});
+  }
 }
 
 void EStep::enqueueLikelihood(cl_mem vertex_map, const EStepVolume& v, int i, const cv::Rect& grid,
@@ -266,14 +270,7 @@ void EStep::computeBackgroundWeights(cl_mem vertex_map, const std::vector<EStepV
     const int r0 = first(r.y), r1 = first(r.y + r.height);
     return cv::Rect(c0 * stride, r0 * stride, std::max(0, c1 - c0), std::max(0, r1 - r0));
   };
-  rects_.assign(volumes.size(), image);
-  keys_.clear();
-  for (size_t i = 1; i < volumes.size(); ++i) {
-    const EStepVolume& v = volumes[i];
-    if (v.pixels) rects_[i] = *v.pixels & image;
-    keys_.push_back({v.view.index, v.count_index, v.view.voxels, poseRows(v.T_volume_camera),
-                     v.claim.lo, v.claim.hi, rects_[i]});
-  }
+  setRectsAndKeys(volumes);
   const EStepCover cover = coverOf(std::vector<cv::Rect>(rects_.begin() + 1, rects_.end()));
   for (size_t i = 0; i < volumes.size(); ++i) {
     const cv::Rect g = grid(rects_[i]);

@@ -113,6 +113,9 @@ class EStep {
   cv::Mat downloadResidual() const;
 
  private:
+  // rects_ (the image for the background, an object's pixels cut to the image) and keys_ of
+  // `volumes`.
+  void setRectsAndKeys(const std::vector<EStepVolume>& volumes);
   // One likelihood pass of volume i (0 = the background) over `grid` (first pixel x, y,
   // columns, rows of every stride-th pixel), and q_i's normalisation over one.
   void enqueueLikelihood(cl_mem vertex_map, const EStepVolume& v, int i, const cv::Rect& grid,
