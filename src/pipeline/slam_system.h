@@ -103,7 +103,8 @@ class SlamSystem {
     std::vector<int> ids;    // volume ids: 0 = background, then objects
     std::vector<cv::Mat> q;  // CV_32F q per id
   };
-  /// Empty when no E-step ran in the last frame (no objects and no detection).
+  /// Empty when no E-step ran in the last frame (no objects and no detection) or the camera was
+  /// lost on it (its E-step gave q_0 alone, at the camera tracker's pixels).
   Associations associations() const;
   /// Object ids ray-cast (frame size, the background occluding) to match the last detections
   /// (CV_32S, -1 none, 0 background); all -1 when no object was alive then, empty before the

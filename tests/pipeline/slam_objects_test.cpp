@@ -4,6 +4,7 @@
 // truth). EMF_OBJECTS_FRAMES overrides the length of the whole-system run (e.g. for a longer
 // manual check); the figures of a run are printed.
 #include <cstdlib>
+#include <limits>
 #include <map>
 #include <set>
 
@@ -297,6 +298,50 @@ TEST(SlamObjects, AFullPoolRefusesObjectsAndCountsBackgroundDrops) {
   config.map.memory_mb = 4;
   const CarsRun small = runCars(config, 30, true);
   EXPECT_GT(small.pool_full_frames, 0);
+}
+
+// A frame without depth while the cars are tracked: the camera is lost, and since its E-step
+// gave only q_0 (at the camera tracker's pixels) the frame has no associations to show; the
+// next frame has them again, q in [0, 1] and summing to at most 1 per pixel.
+TEST(SlamObjects, LostCameraFrameShowsNoAssociations) {
+  const Config config = smallConfig();
+  cl::Context ctx(config.cl);
+  const std::string uri = "synth:cars?frames=8&width=320&height=240&seed=1";
+  auto src = sources::openSource(uri, config.source);
+  SlamSystem slam(ctx, config, src->intrinsics(), uri);
+  core::Frame f;
+  int frame = 0;
+  bool blanked = false, after = false;
+  while (src->next(f)) {
+    const bool blank = frame == 5;
+    if (blank) f.depth.setTo(std::numeric_limits<float>::quiet_NaN());
+    const FrameOutcome o = slam.process(f, f.detections ? &*f.detections : nullptr);
+    const SlamSystem::Associations a = slam.associations();
+    if (blank) {
+      blanked = true;
+      EXPECT_TRUE(o.lost);
+      EXPECT_TRUE(a.ids.empty());
+    } else if (frame > 0) {
+      ASSERT_FALSE(o.lost) << "frame " << frame << ": " << o.loss_reason;
+      ASSERT_GE(a.ids.size(), 2u) << "frame " << frame;  // the background and a car at least
+      ASSERT_EQ(a.q.size(), a.ids.size());
+      cv::Mat sum = cv::Mat::zeros(a.q[0].size(), CV_32F);
+      for (const cv::Mat& q : a.q) {
+        double lo = 0, hi = 0;
+        cv::minMaxLoc(q, &lo, &hi);
+        EXPECT_GE(lo, 0.0);
+        EXPECT_LE(hi, 1.0);
+        sum += q;
+      }
+      double most = 0;
+      cv::minMaxLoc(sum, nullptr, &most);
+      EXPECT_LE(most, 1.0 + 1e-5) << "frame " << frame;
+      after = after || blanked;
+    }
+    ++frame;
+  }
+  EXPECT_TRUE(blanked);
+  EXPECT_TRUE(after);
 }
 
 }  // namespace
