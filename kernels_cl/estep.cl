@@ -23,8 +23,8 @@
 // its q at 0 outside that rectangle (estep_clear over the part a previous E-step wrote). When
 // the objects and their poses are those of the previous E-step (the frame's second E-step moves
 // only the background), their stored likelihoods are added with estep_accumulate instead. The
-// camera's E-step wants only q_0 at the pixels the camera tracker reads: its passes cover every
-// `stride`-th pixel in x and y, and only the background is normalised. Pixels
+// camera's E-step wants only q_0 at the pixels the camera tracker reads: its background pass
+// covers every `stride`-th pixel in x and y, and only the background is normalised. Pixels
 // without a valid vertex get q = 0 for every volume and residual NaN; pixels no volume contains
 // also get q = 0.
 #include "map_common.clh"

@@ -272,23 +272,19 @@ void EStep::computeBackgroundWeights(cl_mem vertex_map, const std::vector<EStepV
   };
   setRectsAndKeys(volumes);
   const EStepCover cover = coverOf(std::vector<cv::Rect>(rects_.begin() + 1, rects_.end()));
-  for (size_t i = 0; i < volumes.size(); ++i) {
-    const cv::Rect g = grid(rects_[i]);
-    if (!g.empty()) {
-      enqueueLikelihood(vertex_map, volumes[i], static_cast<int>(i), g, cover, stride);
+  // The background at the sampled pixels; the objects over their whole rectangles, as compute()
+  // samples them, so that the frame's second E-step can reuse their likelihoods (they add to the
+  // sum at the other pixels too, where this call leaves it unspecified).
+  const cv::Rect bg = grid(image);
+  enqueueLikelihood(vertex_map, volumes[0], 0, bg, cover, stride);
+  for (size_t i = 1; i < volumes.size(); ++i) {
+    if (!rects_[i].empty()) {
+      enqueueLikelihood(vertex_map, volumes[i], static_cast<int>(i), rects_[i], cover, 1);
     }
   }
-  enqueueNormalize(0, grid(image), stride);
-  // At stride 1 the objects' likelihoods are whole, as compute() leaves them: the next compute()
-  // may reuse them. Otherwise their buffers hold a mix of this call's sampled pixels and older
-  // ones: the next compute() samples them again. Their q is untouched.
-  if (stride == 1) {
-    last_objects_.swap(keys_);
-    last_vertex_ = vertex_map;
-  } else {
-    last_objects_.clear();
-    last_vertex_ = nullptr;
-  }
+  enqueueNormalize(0, bg, stride);
+  last_objects_.swap(keys_);  // their q is untouched
+  last_vertex_ = vertex_map;
   reused_ = false;
   count_ = 1;
 }

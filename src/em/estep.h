@@ -90,9 +90,9 @@ class EStep {
 
   /// q of the background alone, at the pixels whose x and y are multiples of `stride` (the
   /// camera tracker's samples at its track.pixel_stride): there it equals compute()'s q(0) to the
-  /// bit; elsewhere q(0) is unspecified, and the objects' q keep what compute() gave them. A next
-  /// compute() with `same_objects` reuses the objects' likelihoods only after stride 1 (at a
-  /// larger stride they were sampled at the stride's pixels alone). Enqueues only. Throws
+  /// bit; elsewhere q(0) is unspecified, and the objects' q keep what compute() gave them. The
+  /// objects' likelihoods are sampled over their whole rectangles: a next compute() with
+  /// `same_objects` reuses them. Enqueues only. Throws
   /// InvalidArgument for too many volumes or a stride below 1.
   void computeBackgroundWeights(cl_mem vertex_map, const std::vector<EStepVolume>& volumes,
                                 int stride);
