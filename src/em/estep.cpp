@@ -261,21 +261,13 @@ void EStep::computeBackgroundWeights(cl_mem vertex_map, const std::vector<EStepV
                           " volumes (capacity " + std::to_string(q_.size()) + "), stride " +
                           std::to_string(stride));
   }
-  const cv::Rect image(0, 0, width_, height_);
-  // The sampled grid of a pixel rectangle: its pixels whose coordinates are multiples of the
-  // stride, as (first pixel x, y, columns, rows).
-  const auto grid = [stride](const cv::Rect& r) {
-    const auto first = [stride](int x) { return (x + stride - 1) / stride; };
-    const int c0 = first(r.x), c1 = first(r.x + r.width);
-    const int r0 = first(r.y), r1 = first(r.y + r.height);
-    return cv::Rect(c0 * stride, r0 * stride, std::max(0, c1 - c0), std::max(0, r1 - r0));
-  };
   setRectsAndKeys(volumes);
   const EStepCover cover = coverOf(std::vector<cv::Rect>(rects_.begin() + 1, rects_.end()));
   // The background at the sampled pixels; the objects over their whole rectangles, as compute()
   // samples them, so that the frame's second E-step can reuse their likelihoods (they add to the
   // sum at the other pixels too, where this call leaves it unspecified).
-  const cv::Rect bg = grid(image);
+  // The image's pixels whose x and y are multiples of the stride: (0, 0, columns, rows).
+  const cv::Rect bg(0, 0, (width_ + stride - 1) / stride, (height_ + stride - 1) / stride);
   enqueueLikelihood(vertex_map, volumes[0], 0, bg, cover, stride);
   for (size_t i = 1; i < volumes.size(); ++i) {
     if (!rects_[i].empty()) {

@@ -92,8 +92,8 @@ class EStep {
   /// camera tracker's samples at its track.pixel_stride): there it equals compute()'s q(0) to the
   /// bit; elsewhere q(0) is unspecified, and the objects' q keep what compute() gave them. The
   /// objects' likelihoods are sampled over their whole rectangles: a next compute() with
-  /// `same_objects` reuses them. Enqueues only. Throws
-  /// InvalidArgument for too many volumes or a stride below 1.
+  /// `same_objects` reuses them. Enqueues only. Throws InvalidArgument for too many volumes or a
+  /// stride below 1.
   void computeBackgroundWeights(cl_mem vertex_map, const std::vector<EStepVolume>& volumes,
                                 int stride);
 
