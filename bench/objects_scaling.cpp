@@ -4,9 +4,10 @@
 // size; the SLAM then runs on the same frames with objects.max_objects = 0, 1, 2, 4, 7 in one
 // invocation (the 0-object run is the baseline). For the frames from --warmup on where exactly that
 // many objects are alive it prints the ms per frame (median, p90) and per stage, and the counts
-// that do not depend on the machine's load: kernel launches, blocking host waits and bytes read
-// back per frame. Last, the marginal cost of one more object (least-squares slope over the
-// counts that were reached).
+// that do not depend on the machine's load: kernel launches, blocking host waits, bytes read
+// back and the objects' tracking steps (Levenberg-Marquardt evaluations of all objects) per
+// frame. Last, the marginal cost of one more object (least-squares slope over the counts that
+// were reached).
 //
 //   objects_scaling [--frames N] [--seed S] [--sizes 320,640] [--counts 0,1,2,4,7]
 //                   [--warmup F]
@@ -47,6 +48,7 @@ struct Row {
   double ms_median = 0, ms_p90 = 0;
   std::map<std::string, double> stage_median;
   double launches = 0, waits = 0, mb_read = 0;  // medians per frame
+  double track_iterations = 0;                  // object tracking LM steps, median per frame
 };
 
 }  // namespace
@@ -143,11 +145,12 @@ int main(int argc, char** argv) {
         r.launches = median(pick(slam.counters().samples("kernel_launches")));
         r.waits = median(pick(slam.counters().samples("host_waits")));
         r.mb_read = median(pick(slam.counters().samples("bytes_read"))) / (1 << 20);
+        r.track_iterations = median(pick(slam.counters().samples("object_track_iterations")));
         rows.push_back(r);
       }
       std::printf("   %-7s %6s %9s %7s |", "objects", "frames", "ms median", "p90");
       for (const auto& stage : SlamSystem::stageNames()) std::printf(" %9.9s", stage.c_str());
-      std::printf(" | %8s %6s %7s\n", "launches", "waits", "MB read");
+      std::printf(" | %8s %6s %7s %8s\n", "launches", "waits", "MB read", "LM steps");
       for (const Row& r : rows) {
         if (r.frames == 0) {
           std::printf("   %-7ld %6s  (never exactly %ld alive after the warm-up)\n", r.objects, "0",
@@ -158,7 +161,8 @@ int main(int argc, char** argv) {
         for (const auto& stage : SlamSystem::stageNames()) {
           std::printf(" %9.2f", r.stage_median.at(stage));
         }
-        std::printf(" | %8.0f %6.0f %7.2f\n", r.launches, r.waits, r.mb_read);
+        std::printf(" | %8.0f %6.0f %7.2f %8.0f\n", r.launches, r.waits, r.mb_read,
+                    r.track_iterations);
       }
       // Least-squares slope over the rows that were measured.
       double sx = 0, sy = 0, sxx = 0, sxy = 0, sl = 0, slx = 0, sw = 0, swx = 0;
