@@ -6,14 +6,15 @@
 //
 // The fit: the detection's mask is the association map (q = 1 on its pixels) and the object
 // tracker aligns the frame's points to the model from several starting poses (T_world_initial
-// candidates): the object's last pose, and the last pose turned about the vertical through the
-// model's centre by 0, 30, .., 330 deg and moved so that the model's rendered points have the
-// detection's centroid. The best fit (the largest inlier share) counts when that share reaches
-// objects.reidentify_min_inliers, at least half of the detection's points landed on the model's
-// observed surface and the model's rendered mask overlaps the detection (IoU >= kMinMaskIoU).
-// A shape that fits about as well (inlier shares within 3 points) in orientations more than
-// 20 deg apart (a symmetric box, a car front to back) re-attaches only in the one nearest its
-// last pose, and only when that is within 20 deg of it.
+// candidates): the object's last pose, and the last pose turned about the world's z axis through
+// the model's centre by 0, 30, .., 330 deg and moved so that the model's rendered points have the
+// detection's centroid. The world is the first camera's frame, so that axis is its optical axis,
+// not the vertical (docs/benchmarks.md, "Object truncation 3.33 voxels"). The best fit (the largest
+// inlier share) counts when that share reaches objects.reidentify_min_inliers, at least half of the
+// detection's points landed on the model's observed surface and the model's rendered mask overlaps
+// the detection (IoU >= kMinMaskIoU). A shape that fits about as well (inlier shares within 3
+// points) in orientations more than 20 deg apart (a symmetric box, a car front to back) re-attaches
+// only in the one nearest its last pose, and only when that is within 20 deg of it.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -25,7 +26,7 @@ namespace emf::pipeline {
 namespace {
 
 constexpr double kPi = 3.141592653589793;
-constexpr int kHeadings = 12;              // starting headings about the vertical, 30 deg apart
+constexpr int kHeadings = 12;              // starting turns about the world's z, 30 deg apart
 constexpr double kMinValidFraction = 0.5;  // of the detection's points on the observed model
 constexpr double kMinMaskIoU = 0.3;        // rendered model mask vs detection mask
 constexpr float kInside = 0.5f;            // mask threshold
