@@ -8,6 +8,7 @@
 
 #include "common/log.h"
 #include "pipeline/object_points.h"
+#include "pipeline/scene_up.h"
 
 namespace emf::pipeline {
 
@@ -287,6 +288,13 @@ void ObjectLifecycle::integrate(const map::IntegrationInput& in) {
 void ObjectLifecycle::createObjects() {
   if (unmatched_.empty()) return;
   const cv::Mat vertex = downloadVertexMap();
+  if (!up_world_) {
+    const std::optional<Eigen::Vector3d> up = upInCamera(vertex);
+    if (up) {
+      up_world_ = T_world_camera_.linear() * *up;
+      logDebug("frame ", frames_, ": the scene's up (world frame) is ", up_world_->transpose());
+    }
+  }
   for (const core::Detection& detected : unmatched_) {
     core::Detection d = detected;  // the part of the mask the object is built from
     d.mask = em::creationMask(detected.mask, vertex, config_.objects);

@@ -274,6 +274,9 @@ class ObjectLifecycle {
   double frame_timestamp_ = 0;
   Eigen::Isometry3d T_world_camera_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d last_motion_ = Eigen::Isometry3d::Identity();
+  // The scene's up direction, world frame (scene_up.h), from the first frame with a new detection
+  // whose surfaces show it; until then the first camera's image up (-y).
+  std::optional<Eigen::Vector3d> up_world_;
   std::map<int, cv::Mat> pending_fg_;  // id -> detection p_fg (CV_32F, NaN = no update)
   std::vector<int> estep_ids_;         // volume ids of the last E-step (empty: none this frame)
   cv::Mat created_mask_;  // union of the masks of objects created this frame (or empty)

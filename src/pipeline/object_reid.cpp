@@ -6,15 +6,17 @@
 //
 // The fit: the detection's mask is the association map (q = 1 on its pixels) and the object
 // tracker aligns the frame's points to the model from several starting poses (T_world_initial
-// candidates): the object's last pose, and the last pose turned about the world's z axis through
-// the model's centre by 0, 30, .., 330 deg and moved so that the model's rendered points have the
-// detection's centroid. The world is the first camera's frame, so that axis is its optical axis,
-// not the vertical (docs/benchmarks.md, "Object truncation 3.33 voxels"). The best fit (the largest
-// inlier share) counts when that share reaches objects.reidentify_min_inliers, at least half of the
-// detection's points landed on the model's observed surface and the model's rendered mask overlaps
-// the detection (IoU >= kMinMaskIoU). A shape that fits about as well (inlier shares within 3
-// points) in orientations more than 20 deg apart (a symmetric box, a car front to back) re-attaches
-// only in the one nearest its last pose, and only when that is within 20 deg of it.
+// candidates): the object's last pose, and the last pose turned about the scene's up direction
+// (scene_up.h) through the model's centre by 0, 30, .., 330 deg and moved so that the model's
+// rendered points have the detection's centroid. A fit that tilts the object more than
+// kMaxTiltRad (30 deg) from its last pose (its up no longer up) is refused: objects come back
+// turned about the vertical, and a tilted fit is a look-alike face of the model. The best fit (the
+// largest inlier share) counts when that share reaches objects.reidentify_min_inliers, at least
+// half of the detection's points landed on the model's observed surface and the model's rendered
+// mask overlaps the detection (IoU >= kMinMaskIoU). A shape that fits about as well (inlier
+// shares within 8 points) in orientations more than 20 deg apart (a symmetric box, a car front
+// to back) re-attaches only in the one nearest its last pose, and only when that is within 20 deg
+// of it.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -26,12 +28,14 @@ namespace emf::pipeline {
 namespace {
 
 constexpr double kPi = 3.141592653589793;
-constexpr int kHeadings = 12;              // starting turns about the world's z, 30 deg apart
+constexpr int kHeadings = 12;              // starting turns about the up direction, 30 deg apart
 constexpr double kMinValidFraction = 0.5;  // of the detection's points on the observed model
 constexpr double kMinMaskIoU = 0.3;        // rendered model mask vs detection mask
 constexpr float kInside = 0.5f;            // mask threshold
-constexpr double kSameFit = 0.03;          // fits whose inlier shares differ by less are alike
+constexpr double kSameFit = 0.08;          // fits whose inlier shares differ by less are alike
 constexpr double kAmbiguousRad = 20.0 * kPi / 180.0;  // alike fits further apart: ambiguous
+constexpr double kMaxTiltRad = 30.0 * kPi / 180.0;    // fits tilted more: refused
+constexpr double kOtherClassReach = 0.5;  // of the model's size: another class's fit moves less
 
 Eigen::Vector3d centroid(const std::vector<Eigen::Vector3d>& points) {
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
@@ -68,7 +72,9 @@ bool ObjectLifecycle::reattach(const core::Detection& d,
   };
   std::vector<Candidate> candidates;
   // Live objects whose pose is stale: lost, or held (hidden, leaving the view) while the object
-  // may have moved on. The detector may confuse their class: geometry decides.
+  // may have moved on. The detector may confuse their class: one of another class re-attaches
+  // only near where it was (within kOtherClassReach of its size), not carried off to another
+  // object's detection.
   for (auto& o : objects_) {
     if ((o.state == ObjectState::kLost || o.state == ObjectState::kInvisible) && o.rendered) {
       candidates.push_back({&o, false});
@@ -92,6 +98,8 @@ bool ObjectLifecycle::reattach(const core::Detection& d,
     double turn = 0;  // rotation from the object's last pose, radians
   };
   std::vector<Fit> fits;
+  // The world is the first camera's frame (y down) until the scene's up is known.
+  const Eigen::Vector3d up = up_world_ ? *up_world_ : Eigen::Vector3d(0.0, -1.0, 0.0);
   for (const Candidate& c : candidates) {
     TrackedObject& o = *c.object;
     map::Volume& volume = *o.volume;
@@ -106,8 +114,7 @@ bool ObjectLifecycle::reattach(const core::Detection& d,
     starts.push_back(T_world_initial);  // where it was
     for (int k = 0; k < kHeadings; ++k) {
       Eigen::Isometry3d turn = Eigen::Isometry3d::Identity();
-      turn.linear() =
-          Eigen::AngleAxisd(2 * kPi * k / kHeadings, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      turn.linear() = Eigen::AngleAxisd(2 * kPi * k / kHeadings, up).toRotationMatrix();
       turn.translation() = centre_world - turn.linear() * centre_world;
       Eigen::Isometry3d start = turn * T_world_initial;
       start.pretranslate(det_world - centre_world);
@@ -149,12 +156,27 @@ bool ObjectLifecycle::reattach(const core::Detection& d,
                r.lost ? "lost (" + r.loss_reason + ")" : std::string("fitted"), ", inliers ",
                r.inlier_ratio, ", on the model ", r.valid_fraction);
       if (r.lost || r.valid_fraction < kMinValidFraction) continue;
+      const Eigen::Isometry3d T_world_initial_fitted =
+          T_world_camera_ * r.T_volume_camera.inverse() * volume.T_volume_initial();
+      const Eigen::Matrix3d R_world_fitted = T_world_initial_fitted.linear();
+      const Eigen::Vector3d up_fitted = R_world_fitted * T_world_initial.linear().transpose() * up;
+      const double moved_m = (T_world_initial_fitted * centre_initial - centre_world).norm();
+      if (o.class_name != d.class_name && moved_m > kOtherClassReach * model_size) {
+        logDebug("frame ", frames_, ": re-identification of object ", o.id, " ('", o.class_name,
+                 "') from start ", s, ": a '", d.class_name, "' detection fits it ", moved_m,
+                 " m from where it was, refused");
+        continue;
+      }
+      if (std::acos(std::clamp(up_fitted.dot(up), -1.0, 1.0)) > kMaxTiltRad) {
+        logDebug("frame ", frames_, ": re-identification of object ", o.id, " from start ", s,
+                 ": fit tilted more than 30 deg from its last pose, refused");
+        continue;
+      }
       Fit f;
       f.object = &o;
       f.dormant = c.dormant;
       f.T_volume_camera = r.T_volume_camera;
-      f.R_world_initial =
-          (T_world_camera_ * r.T_volume_camera.inverse() * volume.T_volume_initial()).linear();
+      f.R_world_initial = R_world_fitted;
       f.score = r.inlier_ratio;
       f.inliers = r.inlier_ratio;
       f.turn = Eigen::AngleAxisd(T_world_initial.linear().transpose() * f.R_world_initial).angle();

@@ -235,7 +235,8 @@ TEST(ObjectRules, CreationMaskKeepsTheLargestContinuousPart) {
 }
 
 TEST(ObjectRules, ObjectTruncationInVoxelsWithAPixelFloorAndTheMapsCap) {
-  ObjectOptions o;  // 5 voxels, at least 4 pixel footprints
+  ObjectOptions o;
+  o.truncation_voxels = 5.0;  // at least 4 pixel footprints (the default)
   const double map_voxels = 10.0;
   // A car 2.3 m away with 1 cm voxels at 320x240 (fx 262.5: 0.88 cm per pixel): 5 voxels.
   EXPECT_NEAR(objectTruncation(o, map_voxels, 0.01, 2.3 / 262.5), 0.05, kTruncationToleranceM);

@@ -24,8 +24,9 @@ const Eigen::Vector3d kBoxCentre(0, 0, 0.2);  // in the box's frame (box_room_sc
 
 constexpr double kStillBoundM = 0.02;  // objects.still_translation_m under test
 // Held on most of the still frames before the push: the first still_frames (15) are tracked to
-// judge it, a noise excursion may release it once.
-constexpr int kMinHeldBeforePush = 30;
+// judge it, a noise excursion may release it once (held again still_frames later), and the
+// frame of the release or two may fall either side of the bound.
+constexpr int kMinHeldBeforePush = 28;
 // The box centre's error (m) on the last frame, after the push: tracked to its new place.
 constexpr double kMaxFinalErrorM = 0.02;
 
