@@ -11,7 +11,7 @@ namespace {
 constexpr double kPi = 3.141592653589793;
 constexpr int kSamplesAcross = 80;      // normals sampled on a grid this many columns wide
 constexpr int kModeCandidates = 256;    // normals tried as the mode
-constexpr double kMaxEdgeRatio = 0.05;  // neighbours farther than 5 % of the depth: an edge
+constexpr double kMaxEdgeRatio = 0.05;  // neighbour gap over this x depth x step: an edge
 
 bool valid(const cv::Vec4f& p) { return p[3] != 0.0f; }
 

@@ -143,8 +143,8 @@ TEST(SlamOcclusion, ACoveredObjectIsHeldAndTrackedAgainWhereItWas) {
   expectHeldAndTrackedAgain(runScene(Config{}.objects.hidden_fraction), 0);
 }
 
-// Sensor noise seed 7: as the undetected panel leaves (frames ~56-62) it pulls the camera by up
-// to 9 cm, the most among the noise seeds on which the camera holds. On a few seeds the panel drags
+// Sensor noise seed 7: as the undetected panel leaves (frames ~56-62) it pulls the camera
+// hardest among the noise seeds on which the camera holds. On a few seeds the panel drags
 // the camera off and the box cannot be found again, a limit of camera tracking beside an
 // undetected mover (docs/benchmarks.md, "Object truncation 3.33 voxels at 64^3"). The box must
 // still be held while covered and tracked again where it was. The bound leaves room for other
