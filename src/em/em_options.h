@@ -142,9 +142,10 @@ struct ObjectOptions {
   /// Still objects (em::looksStill; docs/method.md#object-tracking): held where they stand
   /// once their tracked poses over still_frames frames stay within still_translation_m (m, of
   /// the centre) and still_rotation_deg of the newest; released when a tracked pose leaves
-  /// those bounds. still_translation_m 0 = off (the paper, the default: movers that start
-  /// slowly lag, docs/deviations.md); 0.02 suits scenes of still objects.
-  double still_translation_m = 0.0;
+  /// those bounds or starts to (em::startsMoving). Not in the paper: a still object's own
+  /// tracking jitters and drifts, and movers that start slowly lag a few frames
+  /// (docs/deviations.md). 0 = off (the paper).
+  double still_translation_m = 0.02;
   double still_rotation_deg = 2.0;
   int still_frames = 15;
 

@@ -418,15 +418,18 @@ bool isStillAt(const Eigen::Isometry3d& T_world_held, const Eigen::Isometry3d& T
   return c.centre_m <= options.still_translation_m && c.angle_deg <= options.still_rotation_deg;
 }
 
-bool startsMoving(const std::vector<double>& offsets_m, const ObjectOptions& options) {
-  const size_t n = offsets_m.size();
+bool startsMoving(const std::vector<PoseChange>& offsets, const ObjectOptions& options) {
+  const size_t n = offsets.size();
   if (options.still_translation_m <= 0.0 || n < static_cast<size_t>(kStartFrames) + 1) {
     return false;
   }
+  bool moves = true, turns = true;
   for (size_t i = n - kStartFrames; i < n; ++i) {
-    if (!(offsets_m[i] > offsets_m[i - 1])) return false;
+    moves = moves && offsets[i].centre_m > offsets[i - 1].centre_m;
+    turns = turns && offsets[i].angle_deg > offsets[i - 1].angle_deg;
   }
-  return offsets_m.back() >= 0.25 * options.still_translation_m;
+  return (moves && offsets.back().centre_m >= 0.25 * options.still_translation_m) ||
+         (turns && offsets.back().angle_deg >= 0.5 * options.still_rotation_deg);
 }
 
 bool looksStill(const std::vector<Eigen::Isometry3d>& window, const Eigen::Vector3d& centre,

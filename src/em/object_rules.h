@@ -196,12 +196,14 @@ PoseChange poseChange(const Eigen::Isometry3d& T_world_a, const Eigen::Isometry3
 /// it. It moves again once a tracked pose leaves the held one by more (isStillAt).
 bool looksStill(const std::vector<Eigen::Isometry3d>& window, const Eigen::Vector3d& centre,
                 const ObjectOptions& options);
-/// A held still object starting to move slowly (a push): its tracked centre's distance from the
-/// held pose (`offsets_m`, one per held frame, oldest first) grew on each of the last
-/// kStartFrames frames and reached a quarter of objects.still_translation_m. Depth noise jitters
-/// the offset up and down; a push grows it frame after frame, long before it reaches the bound.
+/// A held still object starting to move slowly (a push, a spin): its tracked pose's change from
+/// the held one (`offsets`, one per held frame, oldest first) grew on each of the last
+/// kStartFrames frames and reached a quarter of the bound in the centre's distance
+/// (objects.still_translation_m), or half of it in the angle (objects.still_rotation_deg; a spin
+/// in place leaves the centre where it is, and the angle jitters more). Depth noise jitters the
+/// offsets up and down; a start grows one frame after frame, long before it reaches the bound.
 constexpr int kStartFrames = 3;
-bool startsMoving(const std::vector<double>& offsets_m, const ObjectOptions& options);
+bool startsMoving(const std::vector<PoseChange>& offsets, const ObjectOptions& options);
 /// Whether the tracked pose T_world_tracked lies within the still bounds of T_world_held.
 bool isStillAt(const Eigen::Isometry3d& T_world_held, const Eigen::Isometry3d& T_world_tracked,
                const Eigen::Vector3d& centre, const ObjectOptions& options);

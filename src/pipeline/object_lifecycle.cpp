@@ -218,7 +218,7 @@ bool ObjectLifecycle::holdStill(TrackedObject& o, const Eigen::Isometry3d& T_wor
   if (!o.claim_initial.isEmpty()) centre = o.volume->T_volume_initial() * o.claim_initial.center();
   if (o.still) {
     const Eigen::Isometry3d& T_world_held = o.volume->T_world_volume();
-    o.held_offsets.push_back(em::poseChange(T_world_held, T_world_tracked, centre).centre_m);
+    o.held_offsets.push_back(em::poseChange(T_world_held, T_world_tracked, centre));
     if (o.held_offsets.size() > static_cast<size_t>(em::kStartFrames) + 1) {
       o.held_offsets.erase(o.held_offsets.begin());
     }

@@ -98,7 +98,7 @@ struct TrackedObject {
   /// whether it is held still (em::looksStill).
   std::vector<Eigen::Isometry3d> recent_poses;
   bool still = false;
-  std::vector<double> held_offsets;  // while still: the tracked centre's offsets from the held pose
+  std::vector<em::PoseChange> held_offsets;  // while still: the tracked poses' change from the held
   em::Existence existence;
   int64_t first_frame = 0, last_frame = 0;
   ObjectState state = ObjectState::kTracked;

@@ -14,7 +14,8 @@
 // largest inlier share) counts when that share reaches objects.reidentify_min_inliers, at least
 // half of the detection's points landed on the model's observed surface and the model's rendered
 // mask overlaps the detection (IoU >= kMinMaskIoU). A shape that fits about as well (inlier
-// shares within 8 points) in orientations more than 20 deg apart (a symmetric box, a car front
+// shares within 8 points, with at least 85 % as many of the detection's points on the model's
+// observed surface) in orientations more than 20 deg apart (a symmetric box, a car front
 // to back) re-attaches only in the one nearest its last pose, and only when that is within 20 deg
 // of it.
 #include <algorithm>
@@ -32,7 +33,8 @@ constexpr int kHeadings = 12;              // starting turns about the up direct
 constexpr double kMinValidFraction = 0.5;  // of the detection's points on the observed model
 constexpr double kMinMaskIoU = 0.3;        // rendered model mask vs detection mask
 constexpr float kInside = 0.5f;            // mask threshold
-constexpr double kSameFit = 0.08;          // fits whose inlier shares differ by less are alike
+constexpr double kSameFit = 0.08;          // fits whose inlier shares differ by less are alike,
+constexpr double kSameSupport = 0.85;      // ... when their points on the model reach this share
 constexpr double kAmbiguousRad = 20.0 * kPi / 180.0;  // alike fits further apart: ambiguous
 constexpr double kMaxTiltRad = 30.0 * kPi / 180.0;    // fits tilted more: refused
 constexpr double kOtherClassReach = 0.5;  // of the model's size: another class's fit moves less
@@ -95,7 +97,8 @@ bool ObjectLifecycle::reattach(const core::Detection& d,
     Eigen::Isometry3d T_volume_camera = Eigen::Isometry3d::Identity();
     Eigen::Matrix3d R_world_initial = Eigen::Matrix3d::Identity();  // the fitted orientation
     double score = 0, inliers = 0, iou = 0;
-    double turn = 0;  // rotation from the object's last pose, radians
+    double on_model = 0;  // share of the detection's points on the model's observed surface
+    double turn = 0;      // rotation from the object's last pose, radians
   };
   std::vector<Fit> fits;
   // The world is the first camera's frame (y down) until the scene's up is known.
@@ -179,6 +182,7 @@ bool ObjectLifecycle::reattach(const core::Detection& d,
       f.R_world_initial = R_world_fitted;
       f.score = r.inlier_ratio;
       f.inliers = r.inlier_ratio;
+      f.on_model = r.valid_fraction;
       f.turn = Eigen::AngleAxisd(T_world_initial.linear().transpose() * f.R_world_initial).angle();
       fits.push_back(f);
     }
@@ -194,7 +198,10 @@ bool ObjectLifecycle::reattach(const core::Detection& d,
   Fit best = top;
   bool ambiguous = false;
   for (const Fit& f : fits) {
-    if (f.object != top.object || f.score < top.score - kSameFit) continue;
+    if (f.object != top.object || f.score < top.score - kSameFit ||
+        f.on_model < kSameSupport * top.on_model) {
+      continue;
+    }
     if (Eigen::AngleAxisd(f.R_world_initial.transpose() * top.R_world_initial).angle() >
         kAmbiguousRad) {
       ambiguous = true;

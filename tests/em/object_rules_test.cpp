@@ -407,15 +407,32 @@ TEST(ObjectRules, PoseChangeMeasuresTheCentreAndTheAngle) {
 TEST(ObjectRules, AHeldObjectStartsMovingWhenItsOffsetGrowsFrameAfterFrame) {
   ObjectOptions o;
   o.still_translation_m = 0.02;  // a quarter: 5 mm
+  o.still_rotation_deg = 2.0;    // half: 1 deg
+  // Offsets of the centre (m) with a jittering angle, and of the angle (deg) with the centre put.
+  const auto moved = [](std::vector<double> m) {
+    std::vector<PoseChange> c;
+    for (size_t i = 0; i < m.size(); ++i) c.push_back({m[i], i % 2 ? 0.3 : 0.1});
+    return c;
+  };
+  const auto turned = [](std::vector<double> deg) {
+    std::vector<PoseChange> c;
+    for (size_t i = 0; i < deg.size(); ++i) c.push_back({i % 2 ? 0.003 : 0.001, deg[i]});
+    return c;
+  };
   // A push: 2, 4, 6 mm over three frames after 1 mm.
-  EXPECT_TRUE(startsMoving({0.001, 0.002, 0.004, 0.006}, o));
+  EXPECT_TRUE(startsMoving(moved({0.001, 0.002, 0.004, 0.006}), o));
   // Too few frames, a jitter that falls back once, or growth that stays below 5 mm: held.
-  EXPECT_FALSE(startsMoving({0.002, 0.004, 0.006}, o));
-  EXPECT_FALSE(startsMoving({0.001, 0.004, 0.003, 0.006}, o));
-  EXPECT_FALSE(startsMoving({0.001, 0.002, 0.003, 0.0045}, o));
+  EXPECT_FALSE(startsMoving(moved({0.002, 0.004, 0.006}), o));
+  EXPECT_FALSE(startsMoving(moved({0.001, 0.004, 0.003, 0.006}), o));
+  EXPECT_FALSE(startsMoving(moved({0.001, 0.002, 0.003, 0.0045}), o));
+  // A spin in place: 0.4, 0.7, 1.1 deg after 0.2; likewise held below 1 deg or on a jitter.
+  EXPECT_TRUE(startsMoving(turned({0.2, 0.4, 0.7, 1.1}), o));
+  EXPECT_FALSE(startsMoving(turned({0.2, 0.4, 0.7, 0.9}), o));
+  EXPECT_FALSE(startsMoving(turned({0.2, 0.7, 0.4, 1.1}), o));
   // Off without still objects.
   o.still_translation_m = 0.0;
-  EXPECT_FALSE(startsMoving({0.001, 0.002, 0.004, 0.006}, o));
+  EXPECT_FALSE(startsMoving(moved({0.001, 0.002, 0.004, 0.006}), o));
+  EXPECT_FALSE(startsMoving(turned({0.2, 0.4, 0.7, 1.1}), o));
 }
 
 TEST(ObjectRules, StillOnceEveryPoseOfTheWindowIsWithinTheBounds) {

@@ -21,8 +21,12 @@ constexpr int kWidth = 320, kHeight = 240;
 constexpr int kFrames = 90;
 constexpr int kBoxId = 1;
 const Eigen::Vector3d kBoxCentre(0, 0, 0.2);  // in the box's frame (box_room_scene.h)
-// The box centre's error while tracked, measured over noise seeds 1-6: 0.12-0.19 cm at most
-// with the rule; 1.4-33 cm without (its last 2-9 tracked frames slide along the border).
+// The box centre's error while tracked during the slide (from kFirstScoredFrame, the box about
+// 10 cm along), measured over noise seeds 1-6: 0.12-0.19 cm at most with the rule; 1.4-33 cm
+// without (its last 2-9 tracked frames slide along the border). The frames before are the slow
+// start of a box that stood still: there the still hold's lag (objects.still_translation_m,
+// tests/pipeline/slam_still_test.cpp) is what shows, not the leaving rule.
+constexpr int kFirstScoredFrame = 30;
 constexpr double kHeldMaxErrorM = 0.005;
 constexpr double kSlidingMinErrorM = 0.01;
 // Frames the box is held before it is deleted (its model no longer explains the pixels it
@@ -50,8 +54,8 @@ struct BoxRun {
   bool held_pose_moved = false;  // a held pose changed in the world between held frames
   int deleted_frame = -1;
   std::string deleted_reason;
-  double max_error_m = 0;  // the box centre's error in the world while tracked
-  double mean_error_m = 0;
+  double max_error_m = 0;   // the box centre's error in the world while tracked, from
+  double mean_error_m = 0;  // kFirstScoredFrame on
 };
 
 BoxRun runScene(double leaving_fraction) {
@@ -68,6 +72,7 @@ BoxRun runScene(double leaving_fraction) {
   test_scene::PointError centre_error(kBoxId, kBoxCentre);
   Eigen::Isometry3d T_world_held = Eigen::Isometry3d::Identity();
   double error_sum = 0;
+  int scored_frames = 0;
   while (src.next(f) && run.deleted_frame < 0) {
     std::vector<core::Detection> dets;
     if (f.index == 0) dets.push_back(test_scene::exactDetection(f, kBoxId));
@@ -87,13 +92,15 @@ BoxRun runScene(double leaving_fraction) {
         T_world_held = o.T_world_object;
       }
       if (o.state != ObjectState::kTracked) continue;
+      ++run.tracked_frames;
+      if (f.index < kFirstScoredFrame) continue;
       const double e = centre_error(f, o.T_object_camera);
       run.max_error_m = std::max(run.max_error_m, e);
       error_sum += e;
-      ++run.tracked_frames;
+      ++scored_frames;
     }
   }
-  if (run.tracked_frames > 0) run.mean_error_m = error_sum / run.tracked_frames;
+  if (scored_frames > 0) run.mean_error_m = error_sum / scored_frames;
   return run;
 }
 

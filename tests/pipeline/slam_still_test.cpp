@@ -29,6 +29,10 @@ constexpr double kStillBoundM = 0.02;  // objects.still_translation_m under test
 constexpr int kMinHeldBeforePush = 28;
 // The box centre's error (m) on the last frame, after the push: tracked to its new place.
 constexpr double kMaxFinalErrorM = 0.02;
+// What holding costs during the push, over the same run without still objects: the frames it
+// takes to release the box (its pose lags) and the model fused at the held pose meanwhile.
+// Measured 0.26 cm (1.59 against 1.33 cm).
+constexpr double kMaxReleaseLagM = 0.005;
 
 synth::Scene pushedBoxScene() {
   synth::Scene s = test_scene::boxRoomScene("pushed-box", kBoxId, 0.2, 0.6);
@@ -47,6 +51,7 @@ struct BoxRun {
   int held_during_push = 0;      // ... during the push
   double final_error_m = -1.0;   // the box centre's error on the last frame
   double max_still_error_m = 0;  // ... largest before the push
+  double max_push_error_m = 0;   // ... largest during the push
 };
 
 BoxRun runScene(double still_translation_m) {
@@ -76,6 +81,7 @@ BoxRun runScene(double still_translation_m) {
         run.held_before_push += held;
       } else if (f.index <= kPushLastFrame) {
         run.held_during_push += held;
+        run.max_push_error_m = std::max(run.max_push_error_m, e);
       }
       run.final_error_m = e;
       T_world_last = o.T_world_object;
@@ -87,14 +93,14 @@ BoxRun runScene(double still_translation_m) {
 
 TEST(SlamStill, AStandingBoxIsHeldAndAPushReleasesIt) {
   const BoxRun held = runScene(kStillBoundM);
-  const BoxRun tracked = runScene(0.0);  // off (the paper, the default)
+  const BoxRun tracked = runScene(0.0);  // off (the paper)
   for (const auto& [name, r] :
        {std::pair<const char*, const BoxRun&>{"still objects", held}, {"off", tracked}}) {
     std::printf(
         "%s: tracked %d, held %d before the push and %d during it; box error max %.2f cm "
-        "before the push, %.2f cm at the end\n",
+        "before the push, %.2f cm during it, %.2f cm at the end\n",
         name, r.tracked_frames, r.held_before_push, r.held_during_push, r.max_still_error_m * 100,
-        r.final_error_m * 100);
+        r.max_push_error_m * 100, r.final_error_m * 100);
   }
   EXPECT_EQ(held.tracked_frames, kFrames);
   EXPECT_EQ(tracked.tracked_frames, kFrames);
@@ -102,6 +108,7 @@ TEST(SlamStill, AStandingBoxIsHeldAndAPushReleasesIt) {
   EXPECT_EQ(tracked.held_before_push, 0) << "off: every tracked pose is taken";
   // The push moves it about 1.3 cm per frame: held on fewer frames than it moves.
   EXPECT_LT(held.held_during_push, (kPushLastFrame - kPushFirstFrame) / 2);
+  EXPECT_LT(held.max_push_error_m, tracked.max_push_error_m + kMaxReleaseLagM);
   EXPECT_LT(held.final_error_m, kMaxFinalErrorM);
   EXPECT_LT(held.max_still_error_m, kStillBoundM);
 }
