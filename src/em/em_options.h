@@ -126,7 +126,7 @@ struct ObjectOptions {
   double creation_depth_jump_m = 0.03;
   double creation_depth_jump_per_m2 = 0.01;
   /// TSDF truncation of object volumes, voxels (the paper: 10, as the background's; 10 voxels
-  /// are 30 % of a new object's extent and blur its model; a thinner band keeps small and thin
+  /// span a large part of a new object and blur its model; a thinner band keeps small and thin
   /// models sharp); docs/deviations.md.
   double truncation_voxels = 3.33;
   /// ... but at least this many pixel footprints at the object's depth, and at most

@@ -5,9 +5,8 @@
 // cube twice the chair's size). The chair must stay where it is, tracked on every frame.
 //
 // With the whole volume claimed (claim_region false, the paper, and no still hold), the chair's
-// unobserved voxels claimed the suitcase at q ~0.4 on its first frames, fused it, then claimed it
-// outright: the chair is dragged 21 cm by frame 116 and deleted on frame 118 for a mean
-// association below 0.1.
+// unobserved voxels claim the suitcase on its first frames, fuse it, then claim it outright: the
+// chair is dragged along and deleted for a mean association below 0.1.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -24,7 +23,7 @@ namespace {
 
 constexpr int kFrames = 120;
 // The still chair's estimated position (its volume's centre) in the world, against its first
-// frame's: measured 0.62 cm at most with the claim region, 21 cm (frame 116) without.
+// frame's: within kStillToleranceM with the claim region, beyond kDraggedM without.
 constexpr double kStillToleranceM = 0.02;
 constexpr double kDraggedM = 0.1;
 

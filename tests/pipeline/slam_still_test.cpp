@@ -30,8 +30,8 @@ constexpr int kMinHeldBeforePush = 28;
 // The box centre's error (m) on the last frame, after the push: tracked to its new place.
 constexpr double kMaxFinalErrorM = 0.02;
 // What holding costs during the push, over the same run without still objects: the frames it
-// takes to release the box (its pose lags) and the model fused at the held pose meanwhile.
-// Measured 0.26 cm (1.59 against 1.33 cm).
+// takes to release the box (its pose lags) and the model fused at the held pose meanwhile
+// (measured: docs/benchmarks.md, still objects).
 constexpr double kMaxReleaseLagM = 0.005;
 
 synth::Scene pushedBoxScene() {
