@@ -16,12 +16,13 @@
 //   [0, 21)  upper triangle of H = sum c h J J^T (row-major: 00 01 .. 05 11 12 .. 55)
 //   [21, 27) g = sum c h J r
 //   27 cost = sum c rho(r)      28 valid samples
-//   29 inliers: |r| <= max(inlier_delta, inlier_noise * z^2), z the pixel's camera-frame depth
-//      (the loss rules' count; the cost keeps the Huber delta)
+//   29 inliers, each weighted by its q: |r| <= max(inlier_delta, inlier_noise * z^2), z the
+//      pixel's camera-frame depth (the loss rules' share; the cost keeps the Huber delta)
 //   30 input pixels (valid vertex and q > 0)          31 max W over valid samples (a max)
 //   32 sum over pixels valid now and in `prev_cost` of (c' rho(r) - prev_cost), c' = c, or
 //      with fixed_weights the previous pose's c (prev_weight)
-//   33 number of those pixels                         34 strict inliers (|r| <= inlier_delta)
+//   33 number of those pixels
+//   34 strict inliers (|r| <= inlier_delta), weighted by q    35 sum of q over valid samples
 // Every sampled pixel's own cost c rho(r) (NaN when not valid) is written to pixel_cost, and
 // with fixed_weights its weight c to pixel_weight, so that the next evaluation can compare
 // costs over the pixels valid at both poses (points entering or leaving the observed map would
@@ -30,7 +31,7 @@
 #include "common.clh"
 #include "voxel_access.clh"
 
-#define TRACK_TERMS 35
+#define TRACK_TERMS 36
 #define TRACK_MAX_TERM 31
 // Work-group shape in work items; each item handles 16 consecutive sampled columns of a row.
 #ifndef TRACK_LX
@@ -77,7 +78,7 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
     __global float* pixel_weight, const int compare, const int fixed_weights,
     __global float* partials) {
   // Term t of item k, its 16 lanes (pixels) folded to 8 (lanes l and l + 8 added):
-  // shared[t * TRACK_ITEMS + k]. 35 x 16 float8 = 17.5 KiB of local memory (OpenCL 1.2
+  // shared[t * TRACK_ITEMS + k]. 36 x 16 float8 = 18 KiB of local memory (OpenCL 1.2
   // guarantees 32 KiB; unfolded float16, 35 KiB, did not fit there).
   __local float8 shared[TRACK_TERMS * TRACK_ITEMS];
   (void)height;  // the host's sampled-grid bounds (sv1) already keep rows inside the image
@@ -179,14 +180,15 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
   TRACK_PUT(26, w5 * r);
   TRACK_PUT(27, cost);
   TRACK_PUT(28, valid ? 1.0f : 0.0f);
-  TRACK_PUT(29, (valid & (abs_r <= fmax(inlier_delta, inlier_noise * pz * pz))) ? 1.0f : 0.0f);
+  TRACK_PUT(29, (valid & (abs_r <= fmax(inlier_delta, inlier_noise * pz * pz))) ? qu : 0.0f);
   TRACK_PUT(30, input ? 1.0f : 0.0f);
   const float16 max_w = valid ? weight : 0.0f;
   mine[TRACK_ITEMS * TRACK_MAX_TERM] = fmax(max_w.lo, max_w.hi);
   const float16 change = (fixed_weights ? prev_c * rho : cost) - prev;
   TRACK_PUT(32, common ? change : 0.0f);
   TRACK_PUT(33, common ? 1.0f : 0.0f);
-  TRACK_PUT(34, (valid & (abs_r <= inlier_delta)) ? 1.0f : 0.0f);
+  TRACK_PUT(34, (valid & (abs_r <= inlier_delta)) ? qu : 0.0f);
+  TRACK_PUT(35, valid ? qu : 0.0f);
 #undef TRACK_PUT
   barrier(CLK_LOCAL_MEM_FENCE);
   // Work item k adds up terms k, k + 16 and k + 32 (written out, no loops: see above).

@@ -143,8 +143,8 @@ struct TrackOptions {
   /// Lost when (pixels landing on observed map) / (pixels with valid depth) is below this.
   double min_valid_fraction = 0.3;
   /// Lost when (points within the inlier radius, below) / (points landing on observed map) is
-  /// below. 0.75 lies between correctly tracked real frames and wrong fits
-  /// (docs/method.md#tracking-loss).
+  /// below, each point weighted by its association q. 0.75 lies between correctly tracked real
+  /// frames and wrong fits (docs/method.md#tracking-loss).
   double min_inlier_ratio = 0.75;
   /// The loss rules' inlier delta as a fraction of the truncation: the paper's Huber delta, 0.2
   /// (2 voxels), on which the ratios here were set. It is separate from huber_truncation_factor,

@@ -13,7 +13,7 @@ namespace emf::track {
 namespace {
 
 // Must match kernels_cl/track_reduce.cl.
-constexpr int kTerms = 35;
+constexpr int kTerms = 36;
 // Work-group shape of track_accumulate (2D over the sampled grid, each work item takes 16
 // consecutive sampled columns of one row): 2 x 8 items = 32 sampled columns x 8 rows.
 constexpr int kLanes = 16;
@@ -40,6 +40,7 @@ enum Term : int {
   kCostChange = 32,
   kCommon = 33,
   kStrictInliers = 34,
+  kValidWeight = 35,
 };
 
 void unpackTerms(const double* t, NormalEquations* ne) {
@@ -54,12 +55,13 @@ void unpackTerms(const double* t, NormalEquations* ne) {
   for (int a = 0; a < 6; ++a) ne->g(a) = t[kG + a];
   ne->cost = t[kCost];
   ne->valid = static_cast<int>(std::lround(t[kValid]));
-  ne->inliers = static_cast<int>(std::lround(t[kInliers]));
+  ne->inliers = t[kInliers];
   ne->input = static_cast<int>(std::lround(t[kInput]));
   ne->max_weight = t[kMaxWeight];
   ne->cost_change = t[kCostChange];
   ne->common = static_cast<int>(std::lround(t[kCommon]));
-  ne->strict_inliers = static_cast<int>(std::lround(t[kStrictInliers]));
+  ne->strict_inliers = t[kStrictInliers];
+  ne->valid_weight = t[kValidWeight];
 }
 
 void checkVolume(const map::VolumeDeviceView& v) {
@@ -138,8 +140,9 @@ NormalEquations accumulateReference(const map::VolumeHostView& volume, const cv:
       const double c = static_cast<double>(qu) * weight;
       const float inlier_radius = std::max(
           inlier_delta, static_cast<float>(inlier_noise_per_m2) * p[2] * p[2]);  // as the kernel
-      t[kInliers] += abs_r <= inlier_radius ? 1.0 : 0.0;
-      t[kStrictInliers] += abs_r <= inlier_delta ? 1.0 : 0.0;
+      t[kInliers] += abs_r <= inlier_radius ? qu : 0.0;
+      t[kStrictInliers] += abs_r <= inlier_delta ? qu : 0.0;
+      t[kValidWeight] += qu;
       const double rho = inlier ? 0.5 * r * r : delta * (abs_r - 0.5 * delta);
       const double cost = c * rho;
       t[kCost] += cost;
@@ -526,9 +529,8 @@ TrackResult Tracker::track(const map::VolumeDeviceView& volume, cl_mem vertex_ma
   result.input_pixels = ne.input;
   result.cost_per_valid = ne.valid > 0 ? result.cost / ne.valid : 0.0;
   result.valid_fraction = ne.input > 0 ? static_cast<double>(ne.valid) / ne.input : 0.0;
-  result.inlier_ratio = ne.valid > 0 ? static_cast<double>(ne.inliers) / ne.valid : 0.0;
-  result.strict_inlier_ratio =
-      ne.valid > 0 ? static_cast<double>(ne.strict_inliers) / ne.valid : 0.0;
+  result.inlier_ratio = ne.valid_weight > 0.0 ? ne.inliers / ne.valid_weight : 0.0;
+  result.strict_inlier_ratio = ne.valid_weight > 0.0 ? ne.strict_inliers / ne.valid_weight : 0.0;
   result.inverse_condition = balancedInverseCondition(ne.H);
   const Eigen::Isometry3d motion = T_volume_camera_init.inverse() * T;
   result.motion_m = motion.translation().norm();
@@ -551,9 +553,9 @@ TrackResult Tracker::track(const map::VolumeDeviceView& volume, cl_mem vertex_ma
         << " / track.max_motion_deg " << options_.max_motion_deg;
   } else if (result.inlier_ratio < options_.min_inlier_ratio) {
     result.loss = TrackLoss::kFewInliers;
-    why << "inlier ratio " << result.inlier_ratio << " (" << ne.inliers << " of " << ne.valid
-        << " points within the inlier radius) is below track.min_inlier_ratio "
-        << options_.min_inlier_ratio;
+    why << "inlier ratio " << result.inlier_ratio << " (points within the inlier radius, weighted "
+        << "by q: " << ne.inliers << " of " << ne.valid_weight << "; " << ne.valid
+        << " points on the map) is below track.min_inlier_ratio " << options_.min_inlier_ratio;
   } else if (recovering(volume.volume_key) &&
              (result.motion_m > options_.recovery_max_motion_m ||
               result.motion_deg > options_.recovery_max_motion_deg)) {
@@ -566,12 +568,12 @@ TrackResult Tracker::track(const map::VolumeDeviceView& volume, cl_mem vertex_ma
   } else if (recovering(volume.volume_key) &&
              result.strict_inlier_ratio < recoveryInlierRatio(volume.volume_key)) {
     result.loss = TrackLoss::kFewInliers;
-    why << "recovering after a lost frame: inlier ratio " << result.strict_inlier_ratio << " ("
-        << ne.strict_inliers << " of " << ne.valid
-        << " points within track.inlier_truncation_factor of the truncation) is below "
-        << recoveryInlierRatio(volume.volume_key) << " (track.recovery_min_inlier_ratio "
-        << options_.recovery_min_inlier_ratio << ", at most the volume's typical inlier ratio - "
-        << kRecoveryMargin << ")";
+    why << "recovering after a lost frame: inlier ratio " << result.strict_inlier_ratio
+        << " (points within track.inlier_truncation_factor of the truncation, weighted by q: "
+        << ne.strict_inliers << " of " << ne.valid_weight << "; " << ne.valid
+        << " points on the map) is below " << recoveryInlierRatio(volume.volume_key)
+        << " (track.recovery_min_inlier_ratio " << options_.recovery_min_inlier_ratio
+        << ", at most the volume's typical inlier ratio - " << kRecoveryMargin << ")";
   } else if (result.inverse_condition < options_.min_inverse_condition) {
     result.loss = TrackLoss::kDegenerate;
     why << "degenerate geometry: inverse condition number " << result.inverse_condition

@@ -26,7 +26,9 @@
 //   |T_init^-1 T| > max_motion_m or max_motion_deg     -> kLargeMotion
 //   inliers / valid < min_inlier_ratio                 -> kFewInliers
 //     (inlier: |r| <= max(inlier delta, inlier_noise_per_m2 z^2), the depth noise allowed for;
-//     inlier delta = inlier_truncation_factor x truncation, the paper's Huber delta)
+//     inlier delta = inlier_truncation_factor x truncation, the paper's Huber delta; both
+//     counts weighted by the pixels' association q: points the E-step gives to another
+//     volume, such as the floor around an object, do not count against it)
 //   recovering and |T_init^-1 T| > recovery_max_motion_m or recovery_max_motion_deg
 //                                                      -> kLargeMotion
 //   recovering and strict_inliers / valid < min(recovery_min_inlier_ratio, typical - 0.05)
@@ -66,7 +68,7 @@ struct NormalEquations {
   Vector6d g = Vector6d::Zero();  // sum c h J r   (metres)
   double cost = 0.0;              // sum c rho(r)  (metres^2)
   int valid = 0;                  // pixels whose point landed on observed map
-  int inliers = 0;                // of those, |r| <= max(delta, inlier_noise_per_m2 z^2)
+  double inliers = 0.0;           // sum of q over those with |r| <= max(delta, noise z^2)
   int input = 0;                  // pixels with a valid vertex and q > 0
   double max_weight = 0.0;        // max W over the valid samples
   /// Compared with an earlier evaluation (per-pixel costs): sum over the pixels valid at both
@@ -74,7 +76,8 @@ struct NormalEquations {
   /// that points entering or leaving the observed map do not make E jump.
   double cost_change = 0.0;
   int common = 0;
-  int strict_inliers = 0;  // valid samples with |r| <= inlier delta (the recovery rule's count)
+  double strict_inliers = 0.0;  // sum of q over valid samples with |r| <= inlier delta (recovery)
+  double valid_weight = 0.0;    // sum of q over the valid samples (the inlier shares' base)
 };
 
 /// CPU reference of the track_accumulate kernel (and its reduction), in double. `vertex`:
@@ -86,7 +89,7 @@ struct NormalEquations {
 /// other pixels untouched). A point counts as an inlier when |r| <= max(inlier_delta_m,
 /// inlier_noise_per_m2 * z^2), z its camera-frame depth (TrackOptions::inlier_noise_per_m2), and
 /// as a strict inlier when |r| <= inlier_delta_m (TrackOptions::inlier_truncation_factor; < 0:
-/// the Huber delta).
+/// the Huber delta); both counts add its q.
 NormalEquations accumulateReference(const map::VolumeHostView& volume, const cv::Mat& vertex,
                                     const cv::Mat& q, int stride,
                                     const Eigen::Isometry3d& T_volume_camera, double huber_delta_m,
@@ -138,8 +141,8 @@ struct TrackResult {
   int valid_pixels = 0;            // finest level: pixels landing on observed map
   int input_pixels = 0;            // finest level: pixels with valid depth and q > 0
   double valid_fraction = 0;       // valid_pixels / input_pixels
-  double inlier_ratio = 0;         // inliers / valid_pixels (depth-dependent inlier radius)
-  double strict_inlier_ratio = 0;  // strict_inliers / valid_pixels (|r| <= inlier delta)
+  double inlier_ratio = 0;         // inliers / valid, q-weighted (depth-dependent inlier radius)
+  double strict_inlier_ratio = 0;  // strict_inliers / valid, q-weighted (|r| <= inlier delta)
   double inverse_condition = 0;    // lambda_min / lambda_max of the balanced Hessian
   double motion_m = 0;             // |translation| of T_init^-1 T_final (camera frame), metres
   double motion_deg = 0;           // rotation angle of T_init^-1 T_final, degrees
