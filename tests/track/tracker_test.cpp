@@ -847,7 +847,7 @@ TEST_F(TrackerTest, PointsGivenToAnotherVolumeDoNotCountAgainstTheInlierRatio) {
   constexpr double kOutlierShareAtLeast = 0.3;  // of the valid points at the true pose, q = 1
   constexpr double kWeightedRatioAtLeast = 0.9;
   constexpr double kRatioVsReferenceTolerance = 1e-3;  // float sums on the device
-  // The q = 0.02 points still pull the pose a little (measured 9 mm).
+  // The points of small q still pull the pose a little.
   constexpr double kPoseToleranceM = 0.015;
   const core::Intrinsics& k = room_->intrinsics;
   cv::Mat depth = room_->depth.clone();
