@@ -3,7 +3,8 @@
 // authors' free-space rule, and the foreground/background count update of object volumes.
 //
 // integrate_blocks: one work-group per listed block (from assign_blocks), 32 work items of 16
-// voxels each (explicit SIMD, branch-free, one unconditional store per voxel). Each voxel centre
+// voxels each (explicit SIMD; the 16 voxels are read and stored only when one of them is
+// observed, which skips the parts of a block hidden behind the surface). Each voxel centre
 // is projected to its nearest pixel u; with d = D(u) - z (projective distance along the camera
 // axis):
 //   d < -truncation                skipped (occluded / behind the surface)
@@ -91,15 +92,22 @@ __kernel __attribute__((reqd_work_group_size(EMF_INTEGRATE_ITEMS, 1, 1))) void i
       (zc > 0.0f) & (u >= 0.0f) & (v >= 0.0f) & (u < (float)width) & (v < (float)height);
   // Lanes out of view read pixel 0 (converted from 0, never from NaN or out-of-range values).
   const int16 pixel = convert_int16(in_view ? v : 0.0f) * width + convert_int16(in_view ? u : 0.0f);
-  float16 d_meas, q;
-#define EMF_INTEGRATE_READ(l)      \
-  d_meas.s##l = depth[pixel.s##l]; \
-  q.s##l = has_weights ? weights[pixel.s##l] : 1.0f;
-  EMF_LANES16(EMF_INTEGRATE_READ)
-#undef EMF_INTEGRATE_READ
+  float16 d_meas;
+#define EMF_INTEGRATE_READ_DEPTH(l) d_meas.s##l = depth[pixel.s##l];
+  EMF_LANES16(EMF_INTEGRATE_READ_DEPTH)
+#undef EMF_INTEGRATE_READ_DEPTH
   const float16 sdf = d_meas - zc;
   // NaN depth fails every comparison.
   const int16 observed = in_view & (d_meas > 0.0f) & (sdf >= -truncation);
+  // Voxels out of view, without depth or hidden behind the surface keep their word: when none of
+  // the 16 is observed, neither q nor the voxels are read.
+  if (!any(observed)) return;
+  float16 q = 1.0f;
+  if (has_weights) {
+#define EMF_INTEGRATE_READ_Q(l) q.s##l = weights[pixel.s##l];
+    EMF_LANES16(EMF_INTEGRATE_READ_Q)
+#undef EMF_INTEGRATE_READ_Q
+  }
   const int16 free_space = sdf > truncation;
   float16 w = (free_space & (int16)(free_space_full_weight ? -1 : 0)) ? 1.0f : q;
   if (behind_dropoff) {
