@@ -46,18 +46,7 @@ int ObjectLifecycle::matchDetections(const DetectionBatch& batch,
       continue;
     }
     matched[static_cast<size_t>(match[i])] = true;
-    TrackedObject& o = objects_[static_cast<size_t>(match[i])];
-    // Held (hidden) or lost, the object's pose is stale, yet the detection shows it, maybe
-    // moved on from there: it is fitted to the detection as a re-identification would (not for
-    // a late result, whose mask belongs to an earlier frame).
-    if ((o.state == ObjectState::kLost || o.state == ObjectState::kInvisible) &&
-        batch.frames_late == 0) {
-      if (vertex.empty()) vertex = downloadVertexMap();
-      core::Detection shown = *usable[i];
-      shown.mask = em::creationMask(usable[i]->mask, vertex, config_.objects);
-      reattach(shown, maskedPoints(vertex, shown.mask), &o);
-    }
-    takeDetection(o, *usable[i], &vertex);
+    takeDetection(objects_[static_cast<size_t>(match[i])], *usable[i], &vertex);
   }
   // A detector of new things only (motion) is silent about the objects it already created.
   if (!batch.new_objects_only) countMisses(matched);
