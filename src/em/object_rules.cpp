@@ -320,9 +320,11 @@ Occlusion occlusion(const cv::Mat& rendered_depth, const cv::Mat& measured_depth
       if (std::isfinite(r[u]) && r[u] > 0.0f) {
         ++occ.rendered;
         const double z = r[u];
-        hidden =
-            std::isfinite(m[u]) && m[u] > 0.0f && m[u] < z - (margin_m + margin_per_m2 * z * z);
+        const bool measured = std::isfinite(m[u]) && m[u] > 0.0f;
+        const double margin = margin_m + margin_per_m2 * z * z;
+        hidden = measured && m[u] < z - margin;
         if (hidden) ++occ.hidden;
+        if (measured && m[u] > z + margin) ++occ.seen_through;
       }
       if (h) h[u] = hidden ? 255 : 0;
     }
@@ -367,6 +369,12 @@ bool isHidden(const Occlusion& occlusion, const ObjectOptions& options, bool was
                                ? std::min(options.visible_again_fraction, options.hidden_fraction)
                                : options.hidden_fraction;
   return occlusion.hiddenFraction() >= threshold;
+}
+
+bool movedOn(const Occlusion& occlusion) {
+  const int unhidden = occlusion.rendered - occlusion.hidden;
+  return occlusion.seen_through > 0 && 2 * occlusion.seen_through >= unhidden &&
+         10 * occlusion.seen_through >= occlusion.rendered;
 }
 
 double inViewFraction(const cv::Mat& wide_ids, int object_id, const cv::Rect& frame) {

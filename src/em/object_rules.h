@@ -132,11 +132,13 @@ double meanAssociation(const cv::Mat& q, const cv::Mat& object_ids, int object_i
 /// z, NaN = not rendered; other objects are not drawn in it): of its rendered pixels, `hidden`
 /// counts those whose measured depth (`measured_depth`, same size, NaN invalid) is nearer than
 /// the rendered surface by more than margin_m + margin_per_m2 z^2 (z the rendered depth):
-/// something stands in front. Pixels without a valid measurement are not hidden. If
-/// `hidden_mask` is given it receives the hidden pixels (CV_8U, 255).
+/// something stands in front. Pixels without a valid measurement are not hidden. `seen_through`
+/// counts those whose measured depth is farther by more than the margin: the model's surface is
+/// not there. If `hidden_mask` is given it receives the hidden pixels (CV_8U, 255).
 struct Occlusion {
   int rendered = 0;
   int hidden = 0;
+  int seen_through = 0;
   double hiddenFraction() const {
     return rendered > 0 ? static_cast<double>(hidden) / rendered : 0.0;
   }
@@ -161,6 +163,12 @@ int uncoverStaleBackground(cv::Mat* ids, const cv::Mat& depth, const cv::Mat& ob
 /// was hidden (`was_hidden`) stays so until fewer than objects.visible_again_fraction are (never
 /// with hidden_fraction 0 or nothing rendered).
 bool isHidden(const Occlusion& occlusion, const ObjectOptions& options, bool was_hidden = false);
+/// Moved on (beyond the paper): of the object's rendered pixels that nothing hides, at least
+/// half are seen through (the measurement lies behind its surface), and they are at least a tenth
+/// of all it renders. Such an object is not hidden but elsewhere: a hidden object is held at its
+/// last pose, and once its unhidden part shows the scene behind that pose, a hold would keep a
+/// stale pose.
+bool movedOn(const Occlusion& occlusion);
 /// Leaving the view (beyond the paper). `wide_ids` is the object's own ray cast over a view
 /// wider than the frame's (its pixels == object_id), `frame` the frame's rectangle in it:
 /// the fraction of its pixels inside `frame` (1 when nothing is rendered).

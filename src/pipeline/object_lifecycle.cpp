@@ -450,10 +450,26 @@ void ObjectLifecycle::checkVisibility(const cv::Mat& depth) {
     // Only an object tracked (or held) up to now becomes hidden or leaving: one whose tracking
     // failed may have moved nearer than its stale pose, which looks the same; it stays lost.
     const bool trusted = o.state == ObjectState::kTracked || o.state == ObjectState::kInvisible;
+    const bool held_hidden = o.state == ObjectState::kInvisible && o.hidden;
     o.hidden = em::isHidden(occ, opt, o.hidden) && trusted;
+    if (o.hidden && em::movedOn(occ)) {
+      // Its part in front shows the scene behind it: the object is not where its pose puts it,
+      // so that pose is not held. One held up to now has moved on behind the occluder: lost
+      // (tracked from here, else re-identified by a detection). One tracked up to now stays
+      // tracked, its part in front judged by its association below.
+      logDebug("frame ", frames_, ": object ", o.id, " not hidden: ", occ.seen_through, " of its ",
+               occ.rendered - occ.hidden, " px in front see through its surface, it moved on", at);
+      o.hidden = false;
+      o.hidden_frames = 0;
+      if (held_hidden) {
+        o.state = ObjectState::kLost;
+        ++o.lost_frames;
+        o.recent_poses.clear();
+      }
+    }
     if (o.hidden) {
       logDebug("frame ", frames_, ": object ", o.id, " hidden: ", occ.hidden, " of ", occ.rendered,
-               " px behind nearer surfaces", at);
+               " px behind nearer surfaces, ", occ.seen_through, " seen through", at);
     }
     double in_view = 1.0;
     if (opt.leaving_fraction > 0.0 && em::touchesImageEdge(ids, o.id)) {

@@ -243,9 +243,10 @@ class ObjectLifecycle {
   // Deletes an object for good (the deletion hook, the outcome, the trackers' state).
   void eraseObject(TrackedObject& o, const std::string& reason);
   /// Re-identification (object_reid.cpp): fits the detection (its creation mask and points,
-  /// camera frame) to the lost and the dormant objects' models; true when one fitted and was
-  /// re-attached at the fitted pose.
-  bool reattach(const core::Detection& d, const std::vector<Eigen::Vector3d>& points_camera);
+  /// camera frame) to the lost and the dormant objects' models, or to `only` (a lost object
+  /// that the detection matched); true when one fitted and was re-attached at the fitted pose.
+  bool reattach(const core::Detection& d, const std::vector<Eigen::Vector3d>& points_camera,
+                TrackedObject* only = nullptr);
   /// Dormant objects past objects.reidentify_frames, or beyond max_objects of them, or (oldest
   /// first) while the pool has less than objects.min_free_pool_fraction free, are deleted.
   void expireDormant();

@@ -46,7 +46,18 @@ int ObjectLifecycle::matchDetections(const DetectionBatch& batch,
       continue;
     }
     matched[static_cast<size_t>(match[i])] = true;
-    takeDetection(objects_[static_cast<size_t>(match[i])], *usable[i], &vertex);
+    TrackedObject& o = objects_[static_cast<size_t>(match[i])];
+    // Lost, the object's pose is stale, yet the detection shows it, maybe moved on from there:
+    // it is fitted to the detection as a re-identification would (not for a late result, whose
+    // mask belongs to an earlier frame). A held object is not: hidden, its visible part may be
+    // too little to fit (em::movedOn turns one that moved on into a lost one).
+    if (o.state == ObjectState::kLost && batch.frames_late == 0) {
+      if (vertex.empty()) vertex = downloadVertexMap();
+      core::Detection shown = *usable[i];
+      shown.mask = em::creationMask(usable[i]->mask, vertex, config_.objects);
+      reattach(shown, maskedPoints(vertex, shown.mask), &o);
+    }
+    takeDetection(o, *usable[i], &vertex);
   }
   // A detector of new things only (motion) is silent about the objects it already created.
   if (!batch.new_objects_only) countMisses(matched);

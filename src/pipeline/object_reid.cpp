@@ -2,7 +2,8 @@
 // an object retired by a rule stays dormant with its model (objects.reidentify_frames); a
 // detection that would create a new object is first fitted to the models of the live objects
 // whose pose is stale (lost, or held as hidden or leaving) and of the dormant ones of its class,
-// and one that fits re-attaches to that object, which keeps its id and trajectory.
+// and one that fits re-attaches to that object, which keeps its id and trajectory. A detection
+// matched to a lost object is fitted to that object alone (object_matching.cpp).
 //
 // The fit: the detection's mask is the association map (q = 1 on its pixels) and the object
 // tracker aligns the frame's points to the model from several starting poses (T_world_initial
@@ -55,7 +56,8 @@ Eigen::Vector3d modelCentre(const TrackedObject& o) {
 }  // namespace
 
 bool ObjectLifecycle::reattach(const core::Detection& d,
-                               const std::vector<Eigen::Vector3d>& points_camera) {
+                               const std::vector<Eigen::Vector3d>& points_camera,
+                               TrackedObject* only) {
   const em::ObjectOptions& opt = config_.objects;
   if (opt.reidentify_frames <= 0 || points_camera.size() < 10) return false;
   const Eigen::Vector3d det_camera = centroid(points_camera);
@@ -78,13 +80,14 @@ bool ObjectLifecycle::reattach(const core::Detection& d,
   // only near where it was (within kOtherClassReach of its size), not carried off to another
   // object's detection.
   for (auto& o : objects_) {
-    if ((o.state == ObjectState::kLost || o.state == ObjectState::kInvisible) && o.rendered) {
+    if ((o.state == ObjectState::kLost || o.state == ObjectState::kInvisible) && o.rendered &&
+        (only == nullptr || only == &o)) {
       candidates.push_back({&o, false});
     }
   }
   // Dormant objects of the detection's class, most recent first, into a free slot only
   // (objects.max_objects).
-  if (static_cast<int>(objects_.size()) < opt.max_objects) {
+  if (only == nullptr && static_cast<int>(objects_.size()) < opt.max_objects) {
     for (auto it = dormant_.rbegin(); it != dormant_.rend(); ++it) {
       if (it->class_name == d.class_name) candidates.push_back({&*it, true});
     }
@@ -228,9 +231,11 @@ bool ObjectLifecycle::reattach(const core::Detection& d,
              best.inliers, ") but covers it with IoU ", best.iou, " only");
     return false;
   }
-  logInfo("frame ", frames_, ": object ", o.id, " ('", o.class_name, "') re-attached",
-          best.dormant ? " from dormant" : " (was lost)", " to a '", d.class_name,
-          "' detection: inliers ", best.inliers, ", mask IoU ", best.iou);
+  const char* was = best.dormant                    ? " from dormant"
+                    : o.state == ObjectState::kLost ? " (was lost)"
+                                                    : " (was held)";
+  logInfo("frame ", frames_, ": object ", o.id, " ('", o.class_name, "') re-attached", was,
+          " to a '", d.class_name, "' detection: inliers ", best.inliers, ", mask IoU ", best.iou);
   o.state = ObjectState::kTracked;
   o.reattached_frame = frames_;
   o.last_frame = frames_;
@@ -240,8 +245,10 @@ bool ObjectLifecycle::reattach(const core::Detection& d,
   o.last_motion = last_motion_;  // assumed still in the world from here
   o.recent_poses.clear();
   o.still = false;
-  o.existence.ex += 1.0;
-  confirmIfDue(o);
+  if (only == nullptr) {  // a matched detection counts in takeDetection
+    o.existence.ex += 1.0;
+    confirmIfDue(o);
+  }
   o.dormant_since = -1;
   o.dormant_reason.clear();
   object_tracker_.forget(o.volume->key());

@@ -490,6 +490,7 @@ TEST(ObjectRules, OcclusionCountsRenderedPixelsBehindNearerMeasurements) {
   EXPECT_EQ(mask.at<uint8_t>(1, 2), 255);
   EXPECT_EQ(mask.at<uint8_t>(1, 3), 255);
   EXPECT_EQ(mask.at<uint8_t>(1, 4), 0);
+  EXPECT_EQ(occ.seen_through, 1);  // (1, 5): 0.5 m behind the surface
 
   ObjectOptions o;
   o.hidden_fraction = 0.5;
@@ -512,6 +513,36 @@ TEST(ObjectRules, OcclusionCountsRenderedPixelsBehindNearerMeasurements) {
   EXPECT_FALSE(isHidden(covered, o, true));
   o.hidden_fraction = 0.5;
   EXPECT_FALSE(isHidden(Occlusion{}, o));  // nothing rendered
+}
+
+TEST(ObjectRules, AnObjectMovedOnWhenMostOfItsUnhiddenPartIsSeenThrough) {
+  // 20 pixels rendered at 2 m; margin 0.05 m + 0.01 z^2 = 0.09 m at 2 m.
+  cv::Mat rendered(4, 5, CV_32F, cv::Scalar(2.0f));
+  cv::Mat measured(4, 5, CV_32F, cv::Scalar(2.0f));
+  measured.rowRange(0, 2).setTo(1.0f);  // 10 hidden behind an occluder
+  measured.at<float>(2, 0) = 2.2f;      // 1 seen through (0.2 m behind), at a silhouette
+  Occlusion occ = occlusion(rendered, measured, 0.05, 0.01);
+  ASSERT_EQ(occ.hidden, 10);
+  ASSERT_EQ(occ.seen_through, 1);
+  EXPECT_FALSE(movedOn(occ));                  // its visible part is where the model says
+  measured(cv::Rect(0, 2, 4, 1)).setTo(3.0f);  // 4 of the 10 unhidden see the wall behind
+  occ = occlusion(rendered, measured, 0.05, 0.01);
+  ASSERT_EQ(occ.seen_through, 4);
+  EXPECT_FALSE(movedOn(occ));       // fewer than half of the unhidden 10
+  measured.at<float>(3, 0) = 3.0f;  // 5 of 10: half
+  occ = occlusion(rendered, measured, 0.05, 0.01);
+  ASSERT_EQ(occ.seen_through, 5);
+  EXPECT_TRUE(movedOn(occ));
+  // Almost wholly hidden: one seen-through pixel of the two in front is a silhouette, under a
+  // tenth of what it renders.
+  measured.setTo(1.0f);
+  measured.at<float>(3, 3) = 3.0f;
+  measured.at<float>(3, 4) = 2.0f;
+  occ = occlusion(rendered, measured, 0.05, 0.01);
+  ASSERT_EQ(occ.hidden, 18);
+  ASSERT_EQ(occ.seen_through, 1);
+  EXPECT_FALSE(movedOn(occ));
+  EXPECT_FALSE(movedOn(Occlusion{}));  // nothing rendered
 }
 
 TEST(ObjectRules, StaleBackgroundGivesPixelsBackWhereTheDepthSeesThroughIt) {
