@@ -47,12 +47,14 @@
 //   the camera only when it sees past the grid).
 // Only the pixels of `rect` (x0, y0, width, height; inside the image) are visited: the whole
 // image, or the rectangle an object's grid projects to (no other pixel's segment reaches it).
+// Only the blocks in [mark_lo, mark_hi) (block coordinates, inside the grid) are marked: the
+// whole grid, or the part of an object's grid its E-step can give pixels to.
 // Launch ceil(rect width / 16) x rect height work items.
 __kernel void mark_blocks(__global const float* depth, const int width, const int4 rect,
                           const float fx, const float fy, const float cx, const float cy,
                           const float4 r0, const float4 r1, const float4 r2, const float block_size,
-                          const float truncation, const int4 dims, __global uchar* needed,
-                          __global int* volume_state) {
+                          const float truncation, const int4 dims, const int4 mark_lo,
+                          const int4 mark_hi, __global uchar* needed, __global int* volume_state) {
   const int x0 = rect.x + get_global_id(0) * 16;
   const int y = rect.y + get_global_id(1);
   const int x_end = rect.x + rect.z;
@@ -109,8 +111,8 @@ __kernel void mark_blocks(__global const float* depth, const int width, const in
   const int16 max_cells = convert_int16(abs(ex - cx_b) + abs(ey - cy_b) + abs(ez - cz_b)) + 1;
   for (int n = 0; any(alive); ++n) {
     alive &= (int16)(n) < max_cells;
-    const int16 mark = alive & (cx_b >= 0) & (cy_b >= 0) & (cz_b >= 0) & (cx_b < dims.x) &
-                       (cy_b < dims.y) & (cz_b < dims.z);
+    const int16 mark = alive & (cx_b >= mark_lo.x) & (cy_b >= mark_lo.y) & (cz_b >= mark_lo.z) &
+                       (cx_b < mark_hi.x) & (cy_b < mark_hi.y) & (cz_b < mark_hi.z);
     const int16 lin = cx_b + dims.x * (cy_b + dims.y * cz_b);
 #define EMF_MARK_STORE(l) \
   if (mark.s##l) needed[lin.s##l] = 1;

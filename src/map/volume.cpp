@@ -185,12 +185,21 @@ AllocationReport Volume::allocate(const IntegrationInput& frame) {
   const cv::Rect image(0, 0, k.width, k.height);
   const cv::Rect rect = frame.pixels ? *frame.pixels & image : image;
   const cl_int4 rect_arg = {{rect.x, rect.y, rect.width, rect.height}};
+  const double block_m = static_cast<double>(kBlockSize) * spec_.voxel_size_m;
+  cl_int4 mark_lo = {{0, 0, 0, 0}}, mark_hi = dims;
+  if (frame.region) {
+    for (int a = 0; a < 3; ++a) {
+      const double lo = std::floor(frame.region->min()[a] / block_m);
+      const double hi = std::floor(frame.region->max()[a] / block_m) + 1.0;
+      mark_lo.s[a] = static_cast<cl_int>(std::clamp(lo, 0.0, static_cast<double>(dims.s[a])));
+      mark_hi.s[a] = static_cast<cl_int>(std::clamp(hi, 0.0, static_cast<double>(dims.s[a])));
+    }
+  }
   cl::setArgs(mark_, *frame.depth, static_cast<cl_int>(k.width), rect_arg,
               static_cast<cl_float>(k.fx), static_cast<cl_float>(k.fy), static_cast<cl_float>(k.cx),
               static_cast<cl_float>(k.cy), row4(T_volume_camera, 0), row4(T_volume_camera, 1),
-              row4(T_volume_camera, 2),
-              static_cast<cl_float>(static_cast<float>(kBlockSize) * spec_.voxel_size_m),
-              static_cast<cl_float>(spec_.truncation_m), dims, needed_, state_);
+              row4(T_volume_camera, 2), static_cast<cl_float>(block_m),
+              static_cast<cl_float>(spec_.truncation_m), dims, mark_lo, mark_hi, needed_, state_);
   // 16 pixels of a row per work item.
   if (!rect.empty()) {
     cl::enqueue(ctx_.queue(), mark_, static_cast<size_t>((rect.width + 15) / 16),

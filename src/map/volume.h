@@ -76,6 +76,10 @@ struct IntegrationInput {
   /// The pixels that may reach the grid (e.g. the projection of an object's grid box,
   /// track::volumeImageBounds); allocation visits only these. Unset = the whole image.
   std::optional<cv::Rect> pixels;
+  /// The part of the grid (volume frame, metres) where blocks may be allocated: blocks that
+  /// meet it. Unset = the whole grid. An object's blocks beyond the region its E-step can give
+  /// pixels to would never hold its surface (ObjectLifecycle::integrate).
+  std::optional<Eigen::AlignedBox3d> region;
 };
 
 /// What one allocation did (counts of blocks of this volume).

@@ -23,6 +23,17 @@ map::VolumeDeviceView deviceView(const map::Volume& volume) {
   return v;
 }
 
+Eigen::AlignedBox3d TrackedObject::claimInVolume() const {
+  Eigen::AlignedBox3d claim;  // empty
+  if (claim_initial.isEmpty()) return claim;
+  const Eigen::Isometry3d& T_volume_initial = volume->T_volume_initial();
+  for (int c = 0; c < 8; ++c) {
+    claim.extend(T_volume_initial *
+                 claim_initial.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)));
+  }
+  return claim;
+}
+
 const char* objectStateName(ObjectState state) {
   switch (state) {
     case ObjectState::kTracked:
@@ -132,13 +143,7 @@ std::vector<em::EStepVolume> ObjectLifecycle::eStepVolumes(
     Eigen::AlignedBox3d reach(Eigen::Vector3d::Zero(), view.dims_blocks.cast<double>() *
                                                            map::kBlockSize * view.voxel_size_m);
     if (!o.claim_initial.isEmpty()) {
-      // Growth shifts the grid by whole blocks: the region's corners in today's volume frame.
-      const Eigen::Isometry3d& T_volume_initial = o.volume->T_volume_initial();
-      Eigen::AlignedBox3d claim;
-      for (int c = 0; c < 8; ++c) {
-        claim.extend(T_volume_initial *
-                     o.claim_initial.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)));
-      }
+      const Eigen::AlignedBox3d claim = o.claimInVolume();
       volumes.back().claim.lo = claim.min().cast<float>();
       volumes.back().claim.hi = claim.max().cast<float>();
       reach = reach.intersection(claim);
@@ -264,11 +269,26 @@ void ObjectLifecycle::integrate(const map::IntegrationInput& in) {
     }
     map::IntegrationInput oi = in;
     oi.weights = &estep_.q(o.e_step_slot);
-    // Allocation visits only the pixels whose rays cross the grid.
+    // Blocks are allocated only near the claim region, by the pixels whose rays cross it: the
+    // E-step gives the object no pixel beyond it, so blocks there would never hold its surface
+    // (a volume grown by masks spilling onto the wall behind would allocate and integrate the
+    // wall's blocks every frame). The margin keeps what the E-step, tracking and ray casts read:
+    // the band behind a claimed surface (one truncation) and the trilinear neighbours at the
+    // region's border. Without a claim region: the pixels whose rays cross the grid.
     const map::VolumeSpec& spec = o.volume->spec();
-    oi.pixels = track::volumeImageBounds(
-                    spec.dims_blocks.cast<double>() * map::kBlockSize * spec.voxel_size_m,
-                    o.volume->T_world_volume().inverse() * in.T_world_camera, in.intrinsics)
+    Eigen::AlignedBox3d reach(Eigen::Vector3d::Zero(), spec.dims_blocks.cast<double>() *
+                                                           map::kBlockSize * spec.voxel_size_m);
+    if (!o.claim_initial.isEmpty()) {
+      Eigen::AlignedBox3d claim = o.claimInVolume();
+      const Eigen::Vector3d margin =
+          Eigen::Vector3d::Constant(spec.truncation_m + map::kBlockSize * spec.voxel_size_m);
+      claim.extend(claim.min() - margin);
+      claim.extend(claim.max() + margin);
+      reach = reach.intersection(claim);
+      oi.region = reach;
+    }
+    oi.pixels = track::boxImageBounds(
+                    reach, o.volume->T_world_volume().inverse() * in.T_world_camera, in.intrinsics)
                     .toCv();
     const auto fg = pending_fg_.find(o.id);
     if (fg != pending_fg_.end()) {

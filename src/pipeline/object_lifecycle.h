@@ -125,6 +125,10 @@ struct TrackedObject {
   /// reported; `earlier` keeps its tracked poses for the outputs once it is confirmed.
   bool confirmed = true;
   std::vector<ConfirmedObject::Pose> earlier;
+
+  /// claim_initial in today's volume frame (growth shifts the grid by whole blocks); empty
+  /// when the object claims its whole volume.
+  Eigen::AlignedBox3d claimInVolume() const;
 };
 
 class ObjectLifecycle {

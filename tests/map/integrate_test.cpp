@@ -121,6 +121,46 @@ TEST_F(Integration, AllocationOverTheGridsImageRectangleMarksTheSameBlocks) {
   }
 }
 
+TEST_F(Integration, AllocationInARegionMarksTheWholeGridsBlocksThatMeetIt) {
+  // The background-sized grid over the analytic scene: allocation limited to a box (volume
+  // frame, metres) marks exactly those blocks of a whole-grid pass whose extent meets the box.
+  const map::MapOptions o = smallOptions();
+  map::VoxelPool pool(ctx(), o);
+  const map::VolumeSpec spec = map::VolumeSpec::background(o);
+  const Eigen::Isometry3d T_wc = Eigen::Isometry3d::Identity();
+  const Eigen::Isometry3d T_wv = map::backgroundVolumePose(o, spec, T_wc);
+  const core::Intrinsics k = testIntrinsics(320, 240);
+  const Scene scene;
+  Frame f = makeFrame(renderDepth(scene, k, T_wc), k, T_wc);
+  map::Volume whole(pool, spec, T_wv), limited(pool, spec, T_wv);
+  const map::AllocationReport rw = whole.allocate(f.input);
+  // Half the grid's extent on x and y, centred; no bound on a block boundary.
+  const Eigen::Vector3d extent = spec.extentM().cast<double>();
+  const Eigen::AlignedBox3d region(
+      Eigen::Vector3d(0.25 * extent.x() + 0.013, 0.25 * extent.y() + 0.011, 0.0),
+      Eigen::Vector3d(0.75 * extent.x() - 0.017, 0.75 * extent.y() - 0.021, extent.z()));
+  Frame fl = makeFrame(f.depth_host, k, T_wc);
+  fl.input.region = region;
+  const map::AllocationReport rl = limited.allocate(fl.input);
+  const map::VolumeHostData hw = whole.download(), hl = limited.download();
+  ASSERT_EQ(hw.index.size(), hl.index.size());
+  const double block_m = map::kBlockSize * static_cast<double>(spec.voxel_size_m);
+  int expected = 0;
+  for (size_t i = 0; i < hw.index.size(); ++i) {
+    const Eigen::Vector3d lo =
+        map::blockCoords(spec.dims_blocks, static_cast<int>(i)).cast<double>() * block_m;
+    const bool meets =
+        !region.intersection(Eigen::AlignedBox3d(lo, lo + Eigen::Vector3d::Constant(block_m)))
+             .isEmpty();
+    const bool want = hw.index[i] >= 0 && meets;
+    expected += want ? 1 : 0;
+    ASSERT_EQ(hl.index[i] >= 0, want) << "block " << i;
+  }
+  EXPECT_GT(expected, 20);
+  EXPECT_LT(expected, rw.listed_blocks);  // the region leaves blocks out
+  EXPECT_EQ(rl.listed_blocks, expected);
+}
+
 TEST_F(Integration, PlainFusionMatchesReferenceOverSeveralViews) {
   const map::MapOptions o = smallOptions();
   map::VoxelPool pool(ctx(), o);
