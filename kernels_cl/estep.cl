@@ -13,7 +13,7 @@
 // at the point (0 outside the volume), the background q_0 = 1 - max_i q_i; no SDF residual
 // term. `sum` then holds the largest object p_fg.
 //
-// Host sequence per E-step: estep_likelihood16 once per volume (first = 1 for the first volume,
+// Host sequence per E-step: estep_likelihood_lanes once per volume (first = 1 for the first volume,
 // the background over the whole image, which initialises the running sum, the best likelihood
 // and the residual), then estep_normalize once per volume. Where no object's rectangle reaches
 // (`cover`), the background's q is 1 wherever its grid holds the point, whatever its SDF: unless
@@ -32,36 +32,36 @@
 /// The object rectangles (x0, y0, width, height) the background pass must evaluate exactly:
 /// `count` of them (count < 0: the whole image). Matches em::EStep's host struct.
 #define EMF_ESTEP_COVER_RECTS 8
+#define EMF_ESTEP_EXACT_COLS 16  // a multiple of EMF_W
 typedef struct {
   int4 rects[EMF_ESTEP_COVER_RECTS];
   int count;
   int pad[3];
 } EStepCover;
 
-/// The likelihood of one volume for 16 pixels of a row per work item, in float16 lanes
-/// (explicit SIMD through emf_sample_sdf16 / emf_sample_pfg16, like track_accumulate: PoCL
+/// The likelihood of one volume for EMF_W pixels of a row per work item, in floatW lanes
+/// (explicit SIMD through emf_sample_sdf_lanes / emf_sample_pfg_lanes, like track_accumulate: PoCL
 /// keeps a per-pixel kernel scalar). Per lane: the formula above, as em::associationLikelihood.
-/// Sixteen pixels none of which falls in the volume skip the sampling. The work items cover the
+/// Lanes none of which falls in the volume skip the sampling. The work items cover the
 /// grid `rect` (x0, y0, columns, rows) of every `stride`-th pixel of an image `width` pixels
-/// wide: item (gx, gy) takes pixels x0 + stride (16 gx + l), l = 0 .. 15, of row
+/// wide: item (gx, gy) takes pixels x0 + stride (EMF_W gx + l), l = 0 .. EMF_W - 1, of row
 /// y0 + stride gy (stride 1: a rectangle of the image).
-__kernel void estep_likelihood16(__global const float4* vertex, const int width, const int4 rect,
-                                 const float4 r0, const float4 r1, const float4 r2,
-                                 __global const int* index, __global const int* count_index,
-                                 const int has_counts, const int4 dims, const float4 claim_lo,
-                                 const float4 claim_hi, __global const short2* voxels,
-                                 const float voxel_size, const float truncation, const float sigma,
-                                 const float alpha, const float p_uniform, const float min_weight,
-                                 const int pfg_mode, const int first, const EStepCover cover,
-                                 const int stride, __global float* likelihood, __global float* sum,
-                                 __global float* best, __global float* residual) {
-  const int gx = get_global_id(0) * 16;  // first lane's column of the grid
+__kernel void estep_likelihood_lanes(
+    __global const float4* vertex, const int width, const int4 rect, const float4 r0,
+    const float4 r1, const float4 r2, __global const int* index, __global const int* count_index,
+    const int has_counts, const int4 dims, const float4 claim_lo, const float4 claim_hi,
+    __global const short2* voxels, const float voxel_size, const float truncation,
+    const float sigma, const float alpha, const float p_uniform, const float min_weight,
+    const int pfg_mode, const int first, const EStepCover cover, const int stride,
+    __global float* likelihood, __global float* sum, __global float* best,
+    __global float* residual) {
+  const int gx = get_global_id(0) * EMF_W;  // first lane's column of the grid
   const int gy = get_global_id(1);
   if (gx >= rect.z || gy >= rect.w) return;
   const int col = rect.x + stride * gx, row = rect.y + stride * gy;  // lane 0's pixel
   const int base = row * width + col;
   const int lanes = rect.z - gx;  // lanes l < lanes are inside the grid
-  float16 px, py, pz, pw;
+  floatW px, py, pz, pw;
 #define ESTEP_LOAD(l)                                               \
   {                                                                 \
     const float4 p = vertex[base + stride * min(0x##l, lanes - 1)]; \
@@ -70,37 +70,41 @@ __kernel void estep_likelihood16(__global const float4* vertex, const int width,
     pz.s##l = p.z;                                                  \
     pw.s##l = p.w;                                                  \
   }
-  EMF_LANES16(ESTEP_LOAD)
+  EMF_LANES(ESTEP_LOAD)
 #undef ESTEP_LOAD
-  const float16 x = r0.x * px + r0.y * py + r0.z * pz + r0.w;
-  const float16 y = r1.x * px + r1.y * py + r1.z * pz + r1.w;
-  const float16 z = r2.x * px + r2.y * py + r2.z * pz + r2.w;
+  const floatW x = r0.x * px + r0.y * py + r0.z * pz + r0.w;
+  const floatW y = r1.x * px + r1.y * py + r1.z * pz + r1.w;
+  const floatW z = r2.x * px + r2.y * py + r2.z * pz + r2.w;
   const float3 extent = (float3)((float)(dims.x * EMF_BLOCK), (float)(dims.y * EMF_BLOCK),
                                  (float)(dims.z * EMF_BLOCK)) *
                         voxel_size;
-  const int16 inside = (pw != 0.0f) & (x >= 0.0f) & (y >= 0.0f) & (z >= 0.0f) & (x < extent.x) &
-                       (y < extent.y) & (z < extent.z) & (x >= claim_lo.x) & (y >= claim_lo.y) &
-                       (z >= claim_lo.z) & (x < claim_hi.x) & (y < claim_hi.y) & (z < claim_hi.z);
+  const intW inside = (pw != 0.0f) & (x >= 0.0f) & (y >= 0.0f) & (z >= 0.0f) & (x < extent.x) &
+                      (y < extent.y) & (z < extent.z) & (x >= claim_lo.x) & (y >= claim_lo.y) &
+                      (z >= claim_lo.z) & (x < claim_hi.x) & (y < claim_hi.y) & (z < claim_hi.z);
   // The first volume (background) outside every object rectangle: only "inside" matters.
+  // Decided per EMF_ESTEP_EXACT_COLS grid columns whatever EMF_W is: the same pixels are exact
+  // (and have a residual) at every lane width.
+  const int group_col = rect.x + stride * (gx / EMF_ESTEP_EXACT_COLS * EMF_ESTEP_EXACT_COLS);
   int exact = !first || cover.count < 0;
   for (int r = 0; r < min(cover.count, EMF_ESTEP_COVER_RECTS) && !exact; ++r) {
     const int4 c = cover.rects[r];
-    exact = row >= c.y && row < c.y + c.w && col < c.x + c.z && col + 15 * stride >= c.x;
+    exact = row >= c.y && row < c.y + c.w && group_col < c.x + c.z &&
+            group_col + (EMF_ESTEP_EXACT_COLS - 1) * stride >= c.x;
   }
-  float16 lik = 0.0f;
-  float16 abs_psi = NAN;
+  floatW lik = 0.0f;
+  floatW abs_psi = NAN;
   if (!exact) {
-    lik = select((float16)0.0f, (float16)1.0f, inside);
+    lik = select((floatW)0.0f, (floatW)1.0f, inside);
   } else if (any(inside)) {
-    float16 weight, gx, gy, gz;
-    const float16 psi = emf_sample_sdf16(index, dims, voxels, voxel_size, truncation, x, y, z,
-                                         &weight, &gx, &gy, &gz);
-    const float16 abs_psi_in = (!isnan(psi) & (weight >= min_weight)) ? fabs(psi) : truncation;
-    const float16 pfg =
-        has_counts ? emf_sample_pfg16(count_index, dims, voxels, voxel_size, x, y, z) : 1.0f;
-    const float16 lik_in = pfg_mode ? (has_counts ? pfg : (float16)1.0f)
-                                    : alpha / (2.0f * sigma) * exp(-abs_psi_in / sigma) * pfg +
-                                          (1.0f - alpha) * p_uniform;
+    floatW weight, gx, gy, gz;
+    const floatW psi = emf_sample_sdf_lanes(index, dims, voxels, voxel_size, truncation, x, y, z,
+                                            &weight, &gx, &gy, &gz);
+    const floatW abs_psi_in = (!isnan(psi) & (weight >= min_weight)) ? fabs(psi) : truncation;
+    const floatW pfg =
+        has_counts ? emf_sample_pfg_lanes(count_index, dims, voxels, voxel_size, x, y, z) : 1.0f;
+    const floatW lik_in = pfg_mode ? (has_counts ? pfg : (floatW)1.0f)
+                                   : alpha / (2.0f * sigma) * exp(-abs_psi_in / sigma) * pfg +
+                                         (1.0f - alpha) * p_uniform;
     lik = inside ? lik_in : 0.0f;
     abs_psi = inside ? abs_psi_in : NAN;
   }
@@ -128,12 +132,12 @@ __kernel void estep_likelihood16(__global const float4* vertex, const int width,
       }                                           \
     }                                             \
   }
-  EMF_LANES16(ESTEP_STORE)
+  EMF_LANES(ESTEP_STORE)
 #undef ESTEP_STORE
 }
 
 /// q_i(u) = likelihood_i(u) / sum(u) (0 where the sum is 0) over the grid `rect` (x0, y0,
-/// columns, rows) of every `stride`-th pixel, one work item per pixel (as estep_likelihood16).
+/// columns, rows) of every `stride`-th pixel, one work item per pixel (as estep_likelihood_lanes).
 /// pfg_mode: objects keep their p_fg, the background (is_background) gets its own value times
 /// 1 - max object p_fg.
 __kernel void estep_normalize(__global float* q, __global const float* likelihood,
@@ -153,7 +157,7 @@ __kernel void estep_normalize(__global float* q, __global const float* likelihoo
 
 /// The running sum of an object whose likelihood is that of the previous E-step (same volume,
 /// same pose; only the background moved): sum += likelihood (pfg_mode: the max) over `rect`,
-/// as estep_likelihood16 does for a volume after the first.
+/// as estep_likelihood_lanes does for a volume after the first.
 __kernel void estep_accumulate(__global const float* likelihood, __global float* sum,
                                const int width, const int4 rect, const int pfg_mode) {
   const int x = get_global_id(0), y = get_global_id(1);

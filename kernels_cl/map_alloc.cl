@@ -1,7 +1,7 @@
 // Block allocation in the voxel-block pool (docs/memory.md#per-frame).
 //
 // Per frame and volume:
-//   mark_blocks          per pixel (16 per work item): marks every block that the pixel's ray
+//   mark_blocks          per pixel (EMF_W per work item): marks every block that the pixel's ray
 //   crosses
 //                        within +-truncation of the measured depth (3-D DDA over blocks; plain
 //                        stores of 1, no atomics).
@@ -38,7 +38,7 @@
 // Depths beyond this (metres) are ignored: keeps block coordinates far inside int range.
 #define EMF_MAX_MARK_DEPTH 1000.0f
 
-// mark_blocks runs 16 pixels of a row per work item, in the lanes of 16-wide vectors (PoCL
+// mark_blocks runs EMF_W pixels of a row per work item, in the lanes of floatW vectors (PoCL
 // keeps the one-pixel-per-item form scalar); the DDA steps all lanes together until the last
 // one is done. Per lane the operations and the cell sequence are those of one pixel:
 //   segment [max(d - truncation, 0), d + truncation] along the pixel's ray (z-depth), in block
@@ -49,80 +49,80 @@
 // image, or the rectangle an object's grid projects to (no other pixel's segment reaches it).
 // Only the blocks in [mark_lo, mark_hi) (block coordinates, inside the grid) are marked: the
 // whole grid, or the part of an object's grid its E-step can give pixels to.
-// Launch ceil(rect width / 16) x rect height work items.
+// Launch ceil(rect width / EMF_W) x rect height work items.
 __kernel void mark_blocks(__global const float* depth, const int width, const int4 rect,
                           const float fx, const float fy, const float cx, const float cy,
                           const float4 r0, const float4 r1, const float4 r2, const float block_size,
                           const float truncation, const int4 dims, const int4 mark_lo,
                           const int4 mark_hi, __global uchar* needed, __global int* volume_state) {
-  const int x0 = rect.x + get_global_id(0) * 16;
+  const int x0 = rect.x + get_global_id(0) * EMF_W;
   const int y = rect.y + get_global_id(1);
   const int x_end = rect.x + rect.z;
   if (x0 >= x_end || y >= rect.y + rect.w) return;
-  const int16 xs = (int16)(x0) + (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  const int16 in_row = xs < x_end;
-  const int16 xr = in_row ? xs : x0;  // lanes past the row end read their row's first pixel
-  float16 d;
+  const intW xs = (intW)(x0) + EMF_LANE_IDS;
+  const intW in_row = xs < x_end;
+  const intW xr = in_row ? xs : x0;  // lanes past the row end read their row's first pixel
+  floatW d;
 #define EMF_MARK_READ(l) d.s##l = depth[y * width + xr.s##l];
-  EMF_LANES16(EMF_MARK_READ)
+  EMF_LANES(EMF_MARK_READ)
 #undef EMF_MARK_READ
-  int16 alive = in_row & !isnan(d) & (d > 0.0f) & (d <= EMF_MAX_MARK_DEPTH);
+  intW alive = in_row & !isnan(d) & (d > 0.0f) & (d <= EMF_MAX_MARK_DEPTH);
   if (!any(alive)) return;
   // emf_pixel_ray, emf_transform and the DDA set-up of the scalar form, per lane.
-  const float16 rx = (convert_float16(xs) - cx) / fx;
+  const floatW rx = (convert_floatW(xs) - cx) / fx;
   const float ry = ((float)y - cy) / fy;
-  const float16 z0 = alive ? fmax(d - truncation, 0.0f) : 0.0f;
-  const float16 z1 = alive ? d + truncation : 0.0f;
-  const float16 ax0 = rx * z0, ay0 = ry * z0, az0 = 1.0f * z0;
-  const float16 ax1 = rx * z1, ay1 = ry * z1, az1 = 1.0f * z1;
-  const float16 ax = (r0.x * ax0 + r0.y * ay0 + r0.z * az0 + r0.w) / block_size;
-  const float16 ay = (r1.x * ax0 + r1.y * ay0 + r1.z * az0 + r1.w) / block_size;
-  const float16 az = (r2.x * ax0 + r2.y * ay0 + r2.z * az0 + r2.w) / block_size;
-  const float16 bx = (r0.x * ax1 + r0.y * ay1 + r0.z * az1 + r0.w) / block_size;
-  const float16 by = (r1.x * ax1 + r1.y * ay1 + r1.z * az1 + r1.w) / block_size;
-  const float16 bz = (r2.x * ax1 + r2.y * ay1 + r2.z * az1 + r2.w) / block_size;
+  const floatW z0 = alive ? fmax(d - truncation, 0.0f) : 0.0f;
+  const floatW z1 = alive ? d + truncation : 0.0f;
+  const floatW ax0 = rx * z0, ay0 = ry * z0, az0 = 1.0f * z0;
+  const floatW ax1 = rx * z1, ay1 = ry * z1, az1 = 1.0f * z1;
+  const floatW ax = (r0.x * ax0 + r0.y * ay0 + r0.z * az0 + r0.w) / block_size;
+  const floatW ay = (r1.x * ax0 + r1.y * ay0 + r1.z * az0 + r1.w) / block_size;
+  const floatW az = (r2.x * ax0 + r2.y * ay0 + r2.z * az0 + r2.w) / block_size;
+  const floatW bx = (r0.x * ax1 + r0.y * ay1 + r0.z * az1 + r0.w) / block_size;
+  const floatW by = (r1.x * ax1 + r1.y * ay1 + r1.z * az1 + r1.w) / block_size;
+  const floatW bz = (r2.x * ax1 + r2.y * ay1 + r2.z * az1 + r2.w) / block_size;
   {
-    const float16 sd = alive ? d : 0.0f;
-    const float16 qx = (r0.x * (rx * sd) + r0.y * (ry * sd) + r0.z * sd + r0.w) / block_size;
-    const float16 qy = (r1.x * (rx * sd) + r1.y * (ry * sd) + r1.z * sd + r1.w) / block_size;
-    const float16 qz = (r2.x * (rx * sd) + r2.y * (ry * sd) + r2.z * sd + r2.w) / block_size;
-    const int16 outside = alive & ((qx < 0.0f) | (qy < 0.0f) | (qz < 0.0f) | (qx >= (float)dims.x) |
-                                   (qy >= (float)dims.y) | (qz >= (float)dims.z));
+    const floatW sd = alive ? d : 0.0f;
+    const floatW qx = (r0.x * (rx * sd) + r0.y * (ry * sd) + r0.z * sd + r0.w) / block_size;
+    const floatW qy = (r1.x * (rx * sd) + r1.y * (ry * sd) + r1.z * sd + r1.w) / block_size;
+    const floatW qz = (r2.x * (rx * sd) + r2.y * (ry * sd) + r2.z * sd + r2.w) / block_size;
+    const intW outside = alive & ((qx < 0.0f) | (qy < 0.0f) | (qz < 0.0f) | (qx >= (float)dims.x) |
+                                  (qy >= (float)dims.y) | (qz >= (float)dims.z));
     int n = 0;
 #define EMF_MARK_OUTSIDE(l) n -= outside.s##l;
-    EMF_LANES16(EMF_MARK_OUTSIDE)
+    EMF_LANES(EMF_MARK_OUTSIDE)
 #undef EMF_MARK_OUTSIDE
     if (n > 0) atomic_add(&volume_state[EMF_VOL_OUTSIDE], n);
   }
-  const float16 dx = bx - ax, dy = by - ay, dz = bz - az;
-  int16 cx_b = convert_int16(floor(ax)), cy_b = convert_int16(floor(ay));
-  int16 cz_b = convert_int16(floor(az));
-  const int16 ex = convert_int16(floor(bx)), ey = convert_int16(floor(by));
-  const int16 ez = convert_int16(floor(bz));
-  const int16 sx = dx > 0.0f ? 1 : (dx < 0.0f ? -1 : 0);
-  const int16 sy = dy > 0.0f ? 1 : (dy < 0.0f ? -1 : 0);
-  const int16 sz = dz > 0.0f ? 1 : (dz < 0.0f ? -1 : 0);
-  float16 tx = sx != 0 ? (convert_float16(cx_b + (sx > 0 ? 1 : 0)) - ax) / dx : INFINITY;
-  float16 ty = sy != 0 ? (convert_float16(cy_b + (sy > 0 ? 1 : 0)) - ay) / dy : INFINITY;
-  float16 tz = sz != 0 ? (convert_float16(cz_b + (sz > 0 ? 1 : 0)) - az) / dz : INFINITY;
-  const float16 tdx = sx != 0 ? convert_float16(sx) / dx : INFINITY;
-  const float16 tdy = sy != 0 ? convert_float16(sy) / dy : INFINITY;
-  const float16 tdz = sz != 0 ? convert_float16(sz) / dz : INFINITY;
-  const int16 max_cells = convert_int16(abs(ex - cx_b) + abs(ey - cy_b) + abs(ez - cz_b)) + 1;
+  const floatW dx = bx - ax, dy = by - ay, dz = bz - az;
+  intW cx_b = convert_intW(floor(ax)), cy_b = convert_intW(floor(ay));
+  intW cz_b = convert_intW(floor(az));
+  const intW ex = convert_intW(floor(bx)), ey = convert_intW(floor(by));
+  const intW ez = convert_intW(floor(bz));
+  const intW sx = dx > 0.0f ? 1 : (dx < 0.0f ? -1 : 0);
+  const intW sy = dy > 0.0f ? 1 : (dy < 0.0f ? -1 : 0);
+  const intW sz = dz > 0.0f ? 1 : (dz < 0.0f ? -1 : 0);
+  floatW tx = sx != 0 ? (convert_floatW(cx_b + (sx > 0 ? 1 : 0)) - ax) / dx : INFINITY;
+  floatW ty = sy != 0 ? (convert_floatW(cy_b + (sy > 0 ? 1 : 0)) - ay) / dy : INFINITY;
+  floatW tz = sz != 0 ? (convert_floatW(cz_b + (sz > 0 ? 1 : 0)) - az) / dz : INFINITY;
+  const floatW tdx = sx != 0 ? convert_floatW(sx) / dx : INFINITY;
+  const floatW tdy = sy != 0 ? convert_floatW(sy) / dy : INFINITY;
+  const floatW tdz = sz != 0 ? convert_floatW(sz) / dz : INFINITY;
+  const intW max_cells = convert_intW(abs(ex - cx_b) + abs(ey - cy_b) + abs(ez - cz_b)) + 1;
   for (int n = 0; any(alive); ++n) {
-    alive &= (int16)(n) < max_cells;
-    const int16 mark = alive & (cx_b >= mark_lo.x) & (cy_b >= mark_lo.y) & (cz_b >= mark_lo.z) &
-                       (cx_b < mark_hi.x) & (cy_b < mark_hi.y) & (cz_b < mark_hi.z);
-    const int16 lin = cx_b + dims.x * (cy_b + dims.y * cz_b);
+    alive &= (intW)(n) < max_cells;
+    const intW mark = alive & (cx_b >= mark_lo.x) & (cy_b >= mark_lo.y) & (cz_b >= mark_lo.z) &
+                      (cx_b < mark_hi.x) & (cy_b < mark_hi.y) & (cz_b < mark_hi.z);
+    const intW lin = cx_b + dims.x * (cy_b + dims.y * cz_b);
 #define EMF_MARK_STORE(l) \
   if (mark.s##l) needed[lin.s##l] = 1;
-    EMF_LANES16(EMF_MARK_STORE)
+    EMF_LANES(EMF_MARK_STORE)
 #undef EMF_MARK_STORE
     // Axis of the nearest block face (ties: x before y before z), as in the scalar form.
-    const int16 kx = (tx <= ty) & (tx <= tz);
-    const int16 ky = !kx & (ty <= tz);
-    const int16 kz = !kx & !ky;
-    const float16 t_near = kx ? tx : (ky ? ty : tz);
+    const intW kx = (tx <= ty) & (tx <= tz);
+    const intW ky = !kx & (ty <= tz);
+    const intW kz = !kx & !ky;
+    const floatW t_near = kx ? tx : (ky ? ty : tz);
     alive &= !(t_near > 1.0f);
     cx_b += (alive & kx) ? sx : 0;
     cy_b += (alive & ky) ? sy : 0;

@@ -39,10 +39,6 @@ inline bool emf_depth_in_range(float d, float min_depth, float max_depth) {
   return emf_is_valid(d) && d > 0.0f && d >= min_depth && d <= max_depth;
 }
 
-/// Expands F(lane) for the 16 lanes (component suffixes .s0 ... .sf).
-#define EMF_PRE_LANES16(F) \
-  F(0) F(1) F(2) F(3) F(4) F(5) F(6) F(7) F(8) F(9) F(a) F(b) F(c) F(d) F(e) F(f)
-
 #ifndef PRE_RADIUS
 #define PRE_RADIUS 3
 #endif
@@ -50,33 +46,33 @@ inline bool emf_depth_in_range(float d, float min_depth, float max_depth) {
 #define PRE_STRIDE 1
 #endif
 
-// Sixteen pixels of a row per work item (float16 arithmetic: PoCL does not vectorise across
-// work items here, so the SIMD is explicit; GPUs see 16 independent lanes).
+// EMF_W pixels of a row per work item (floatW arithmetic, common.clh: PoCL does not vectorise
+// across work items here, so the SIMD is explicit; GPUs see EMF_W independent lanes).
 // The window radius and the sample stride are build options (-DPRE_RADIUS=r -DPRE_STRIDE=s, one
 // cached program per pair). Invalid or out-of-image neighbours (loaded as NaN) are masked out of
 // the sums.
 // The helpers are always inlined: a call in the tap loop makes every live vector spill.
 
-/// Depths of 16 pixels of a row: lane l reads row[u + l * step]; lanes outside the row read NaN
+/// Depths of EMF_W pixels of a row: lane l reads row[u + l * step]; lanes outside the row read NaN
 /// (invalid: masked out of the sums like a missing depth).
-__attribute__((always_inline)) inline float16 emf_load16(__global const float* row, int u, int step,
-                                                         int width) {
-  if (step == 1 && u >= 0 && u + 15 < width) return vload16(0, row + u);
-  if (step == 2 && u >= 0 && u + 31 < width) {
+__attribute__((always_inline)) inline floatW emf_load_lanes(__global const float* row, int u,
+                                                            int step, int width) {
+  if (step == 1 && u >= 0 && u + EMF_W - 1 < width) return vloadW(0, row + u);
+  if (step == 2 && u >= 0 && u + 2 * EMF_W - 1 < width) {
     // The even lanes of two loads (swizzles: PoCL's shuffle2 runs lane by lane).
-    const float16 a = vload16(0, row + u), b = vload16(0, row + u + 16);
-    return (float16)(a.even, b.even);
+    const floatW a = vloadW(0, row + u), b = vloadW(0, row + u + EMF_W);
+    return (floatW)(a.even, b.even);
   }
-  float16 r;
+  floatW r;
 #define EMF_PRE_LOAD(l) \
   r.s##l = (u + 0x##l * step >= 0 && u + 0x##l * step < width) ? row[u + 0x##l * step] : NAN;
-  EMF_PRE_LANES16(EMF_PRE_LOAD)
+  EMF_LANES(EMF_PRE_LOAD)
 #undef EMF_PRE_LOAD
   return r;
 }
 
-__attribute__((always_inline)) inline int16 emf_in_range16(float16 d, float min_depth,
-                                                           float max_depth) {
+__attribute__((always_inline)) inline intW emf_in_range_lanes(floatW d, float min_depth,
+                                                              float max_depth) {
   // The comparisons are false for NaN.
   return (d > 0.0f) & (d >= min_depth) & (d <= max_depth);
 }
@@ -88,13 +84,13 @@ inline float emf_above(float min_depth) { return fmax(0.0f, nextafter(min_depth,
 /// exp(x) for x <= 0 (the bilateral weights): 2^(x log2 e) split into 2^n (exponent bits) and
 /// 2^f, |f| <= 1/2, by a degree-7 polynomial (relative error below 3e-7, a few float ulps of
 /// the libm exp the CPU reference uses). Arguments below -87 give 0 instead of a subnormal.
-__attribute__((always_inline)) inline float16 emf_exp_neg16(float16 x) {
-  const float16 y = fmax(x * 1.44269504f, -126.0f);
+__attribute__((always_inline)) inline floatW emf_exp_neg_lanes(floatW x) {
+  const floatW y = fmax(x * 1.44269504f, -126.0f);
   // Round to nearest (even) by adding and subtracting 1.5 * 2^23 (|y| <= 126).
-  const float16 n = (y + 12582912.0f) - 12582912.0f;
-  const float16 f = y - n;
+  const floatW n = (y + 12582912.0f) - 12582912.0f;
+  const floatW f = y - n;
   // 2^f = e^(f ln 2), Taylor coefficients of e^t at t = f ln 2 folded into powers of f.
-  float16 p = 1.5252734e-5f;
+  floatW p = 1.5252734e-5f;
   p = p * f + 1.5403530e-4f;
   p = p * f + 1.3333558e-3f;
   p = p * f + 9.6181291e-3f;
@@ -102,40 +98,40 @@ __attribute__((always_inline)) inline float16 emf_exp_neg16(float16 x) {
   p = p * f + 2.4022651e-1f;
   p = p * f + 6.9314718e-1f;
   p = p * f + 1.0f;
-  const float16 scale = as_float16((convert_int16(n) + 127) << 23);
+  const floatW scale = as_floatW((convert_intW(n) + 127) << 23);
   return y > -126.0f ? p * scale : 0.0f;
 }
 
-/// The bilateral filter at 16 pixels of row v, lane l at column u0 + l * step, with centre
+/// The bilateral filter at EMF_W pixels of row v, lane l at column u0 + l * step, with centre
 /// depths d0: the weighted mean of the window's usable depths (NaN where the centre is not
 /// usable), and in *hole the lanes whose window (inside the image) holds a pixel without usable
 /// depth. Per lane the operations do not depend on `step`: a pixel's result is the same to the
 /// bit whichever kernel computes it.
-__attribute__((always_inline)) inline float16 emf_bilateral16(
-    __global const float* depth_in, int width, int height, int u0, int v, int step, float16 d0,
+__attribute__((always_inline)) inline floatW emf_bilateral_lanes(
+    __global const float* depth_in, int width, int height, int u0, int v, int step, floatW d0,
     float inv_two_sigma_space_sq, float sigma_depth, float sigma_depth_per_m2, float min_depth,
-    float max_depth, int16* hole_out) {
-  const int16 lane = (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  const int16 centre_valid = emf_in_range16(d0, min_depth, max_depth);
+    float max_depth, intW* hole_out) {
+  const intW lane = EMF_LANE_IDS;
+  const intW centre_valid = emf_in_range_lanes(d0, min_depth, max_depth);
   const float above = emf_above(min_depth);
   // Range sigma at the centre's depth: sigma_depth + sigma_depth_per_m2 z^2.
-  const float16 sigma_r = sigma_depth + sigma_depth_per_m2 * (centre_valid ? d0 * d0 : 0.0f);
-  const float16 inv_two_sigma_r_sq = 0.5f / (sigma_r * sigma_r);
-  float16 sum_w = 0.0f;
-  float16 sum_wd = 0.0f;
-  int16 hole = 0;
+  const floatW sigma_r = sigma_depth + sigma_depth_per_m2 * (centre_valid ? d0 * d0 : 0.0f);
+  const floatW inv_two_sigma_r_sq = 0.5f / (sigma_r * sigma_r);
+  floatW sum_w = 0.0f;
+  floatW sum_wd = 0.0f;
+  intW hole = 0;
   for (int dv = -PRE_RADIUS; dv <= PRE_RADIUS; ++dv) {
     const int vv = v + dv;
     if (vv < 0 || vv >= height) continue;
     __global const float* row = depth_in + vv * width;
     for (int du = -PRE_RADIUS; du <= PRE_RADIUS; ++du) {
-      const float16 d = emf_load16(row, u0 + du, step, width);
-      const int16 use = (d > above) & (d <= max_depth);
-      const int16 col = u0 + du + lane * step;
+      const floatW d = emf_load_lanes(row, u0 + du, step, width);
+      const intW use = (d > above) & (d <= max_depth);
+      const intW col = u0 + du + lane * step;
       hole |= (col >= 0) & (col < width) & !use;
-      const float16 dd = d - d0;
-      const float16 w = emf_exp_neg16(-(float)(du * du + dv * dv) * inv_two_sigma_space_sq -
-                                      dd * dd * inv_two_sigma_r_sq);
+      const floatW dd = d - d0;
+      const floatW w = emf_exp_neg_lanes(-(float)(du * du + dv * dv) * inv_two_sigma_space_sq -
+                                         dd * dd * inv_two_sigma_r_sq);
       sum_w += use ? w : 0.0f;
       sum_wd += use ? w * d : 0.0f;
     }
@@ -146,8 +142,9 @@ __attribute__((always_inline)) inline float16 emf_bilateral16(
 }
 
 // preprocess_depth: the pixels (u, v) with u and v multiples of PRE_STRIDE (all of them at
-// stride 1), 16 per work item: lane l of item (gx, gy) is pixel (PRE_STRIDE (16 gx + l),
-// PRE_STRIDE gy). Global size: (ceil(ceil(width / PRE_STRIDE) / 16), ceil(height / PRE_STRIDE)).
+// stride 1), EMF_W per work item: lane l of item (gx, gy) is pixel (PRE_STRIDE (EMF_W gx + l),
+// PRE_STRIDE gy). Global size: (ceil(ceil(width / PRE_STRIDE) / EMF_W), ceil(height /
+// PRE_STRIDE)).
 // The other pixels' filtered depth and vertex are not written (the host keeps them invalid);
 // with a stride the guarded depth (write_guarded) is preprocess_guard's, for every pixel.
 // The range guard drops a valid pixel whose filtered depth is beyond guard_max_depth (INFINITY:
@@ -159,30 +156,30 @@ __kernel void preprocess_depth(__global const float* depth_in, __global float* d
                                const float max_depth, const float fx, const float fy,
                                const float cx, const float cy, const float guard_max_depth,
                                __global float* guarded, const int write_guarded) {
-  const int u0 = get_global_id(0) * 16 * PRE_STRIDE;
+  const int u0 = get_global_id(0) * EMF_W * PRE_STRIDE;
   const int v = get_global_id(1) * PRE_STRIDE;
   if (u0 >= width || v >= height) return;
-  const int16 lane = (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  const float16 d0 = emf_load16(depth_in + v * width, u0, PRE_STRIDE, width);
-  int16 hole;
-  const float16 filtered =
-      emf_bilateral16(depth_in, width, height, u0, v, PRE_STRIDE, d0, inv_two_sigma_space_sq,
-                      sigma_depth, sigma_depth_per_m2, min_depth, max_depth, &hole);
-  const int16 centre_valid = emf_in_range16(d0, min_depth, max_depth);
-  const int16 guard_drop = centre_valid & hole & !(filtered <= guard_max_depth);
-  const float16 z = (centre_valid & !guard_drop) ? filtered : NAN;
-  const float16 x = (convert_float16(u0 + lane * PRE_STRIDE) - cx) / fx * z;
+  const intW lane = EMF_LANE_IDS;
+  const floatW d0 = emf_load_lanes(depth_in + v * width, u0, PRE_STRIDE, width);
+  intW hole;
+  const floatW filtered =
+      emf_bilateral_lanes(depth_in, width, height, u0, v, PRE_STRIDE, d0, inv_two_sigma_space_sq,
+                          sigma_depth, sigma_depth_per_m2, min_depth, max_depth, &hole);
+  const intW centre_valid = emf_in_range_lanes(d0, min_depth, max_depth);
+  const intW guard_drop = centre_valid & hole & !(filtered <= guard_max_depth);
+  const floatW z = (centre_valid & !guard_drop) ? filtered : NAN;
+  const floatW x = (convert_floatW(u0 + lane * PRE_STRIDE) - cx) / fx * z;
   const float y = ((float)v - cy) / fy;
   const int i0 = v * width + u0;
 #if PRE_STRIDE == 1
-  if (u0 + 15 < width) vstore16(z, 0, depth_out + i0);
+  if (u0 + EMF_W - 1 < width) vstoreW(z, 0, depth_out + i0);
   // The depth the map integrates: the input, without the pixels the guard dropped.
-  const float16 kept = guard_drop ? NAN : d0;
-  if (write_guarded && u0 + 15 < width) vstore16(kept, 0, guarded + i0);
+  const floatW kept = guard_drop ? NAN : d0;
+  if (write_guarded && u0 + EMF_W - 1 < width) vstoreW(kept, 0, guarded + i0);
 #define EMF_PRE_STORE(l)                                                             \
   if (u0 + 0x##l < width) {                                                          \
-    if (u0 + 15 >= width) depth_out[i0 + 0x##l] = z.s##l;                            \
-    if (write_guarded && u0 + 15 >= width) guarded[i0 + 0x##l] = kept.s##l;          \
+    if (u0 + EMF_W - 1 >= width) depth_out[i0 + 0x##l] = z.s##l;                     \
+    if (write_guarded && u0 + EMF_W - 1 >= width) guarded[i0 + 0x##l] = kept.s##l;   \
     vertex[i0 + 0x##l] = isnan(z.s##l) ? (float4)(NAN, NAN, NAN, 0.0f)               \
                                        : (float4)(x.s##l, y * z.s##l, z.s##l, 1.0f); \
   }
@@ -196,47 +193,47 @@ __kernel void preprocess_depth(__global const float* depth_in, __global float* d
                                                     : (float4)(x.s##l, y * z.s##l, z.s##l, 1.0f); \
   }
 #endif
-  EMF_PRE_LANES16(EMF_PRE_STORE)
+  EMF_LANES(EMF_PRE_STORE)
 #undef EMF_PRE_STORE
 }
 
-/// Stores 16 values at row[u0 .. u0 + 15], the lanes inside the row.
-__attribute__((always_inline)) inline void emf_store16(float16 x, __global float* row, int u0,
-                                                       int width) {
-  if (u0 + 15 < width) {
-    vstore16(x, 0, row + u0);
+/// Stores EMF_W values at row[u0 .. u0 + EMF_W - 1], the lanes inside the row.
+__attribute__((always_inline)) inline void emf_store_lanes(floatW x, __global float* row, int u0,
+                                                           int width) {
+  if (u0 + EMF_W - 1 < width) {
+    vstoreW(x, 0, row + u0);
     return;
   }
-#define EMF_PRE_STORE16(l) \
+#define EMF_PRE_STORE(l) \
   if (u0 + 0x##l < width) row[u0 + 0x##l] = x.s##l;
-  EMF_PRE_LANES16(EMF_PRE_STORE16)
-#undef EMF_PRE_STORE16
+  EMF_LANES(EMF_PRE_STORE)
+#undef EMF_PRE_STORE
 }
 
 /// The range guard alone at every pixel, for preprocess_depth with a stride, in two separable
-/// passes (16 pixels per work item, global size (ceil(width / 16), height) each).
+/// passes (EMF_W pixels per work item, global size (ceil(width / EMF_W), height) each).
 /// preprocess_guard_rows: per pixel, over its window's row (the 2 PRE_RADIUS + 1 pixels around
 /// it), the largest usable depth m (0 without any) and whether a pixel inside the image lacks
 /// usable depth: row_max = m, or -1 - m with such a hole.
 __kernel void preprocess_guard_rows(__global const float* depth_in, __global float* row_max,
                                     const int width, const int height, const float min_depth,
                                     const float max_depth) {
-  const int u0 = get_global_id(0) * 16;
+  const int u0 = get_global_id(0) * EMF_W;
   const int v = get_global_id(1);
   if (u0 >= width || v >= height) return;
-  const int16 lane = (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  const intW lane = EMF_LANE_IDS;
   const float above = emf_above(min_depth);
   __global const float* row = depth_in + v * width;
-  int16 hole = 0;
-  float16 largest = 0.0f;
+  intW hole = 0;
+  floatW largest = 0.0f;
   for (int du = -PRE_RADIUS; du <= PRE_RADIUS; ++du) {
-    const float16 d = emf_load16(row, u0 + du, 1, width);
-    const int16 use = (d > above) & (d <= max_depth);
-    const int16 col = u0 + du + lane;
+    const floatW d = emf_load_lanes(row, u0 + du, 1, width);
+    const intW use = (d > above) & (d <= max_depth);
+    const intW col = u0 + du + lane;
     hole |= (col >= 0) & (col < width) & !use;
     largest = use ? fmax(largest, d) : largest;
   }
-  emf_store16(hole ? -1.0f - largest : largest, row_max + v * width, u0, width);
+  emf_store_lanes(hole ? -1.0f - largest : largest, row_max + v * width, u0, width);
 }
 
 /// preprocess_guard: the window's hole and largest usable depth from the rows of row_max above
@@ -250,29 +247,29 @@ __kernel void preprocess_guard(__global const float* depth_in, __global const fl
                                const float inv_two_sigma_space_sq, const float sigma_depth,
                                const float sigma_depth_per_m2, const float min_depth,
                                const float max_depth, const float guard_max_depth) {
-  const int u0 = get_global_id(0) * 16;
+  const int u0 = get_global_id(0) * EMF_W;
   const int v = get_global_id(1);
   if (u0 >= width || v >= height) return;
-  const float16 d0 = emf_load16(depth_in + v * width, u0, 1, width);
-  const int16 centre_valid = emf_in_range16(d0, min_depth, max_depth);
-  int16 hole = 0;
-  float16 largest = 0.0f;
+  const floatW d0 = emf_load_lanes(depth_in + v * width, u0, 1, width);
+  const intW centre_valid = emf_in_range_lanes(d0, min_depth, max_depth);
+  intW hole = 0;
+  floatW largest = 0.0f;
   for (int dv = -PRE_RADIUS; dv <= PRE_RADIUS; ++dv) {
     const int vv = v + dv;
     if (vv < 0 || vv >= height) continue;
     // Lanes beyond the row read NaN: no hole, no depth (their pixels are not stored).
-    const float16 r = emf_load16(row_max + vv * width, u0, 1, width);
+    const floatW r = emf_load_lanes(row_max + vv * width, u0, 1, width);
     hole |= r < 0.0f;
     largest = fmax(largest, r < 0.0f ? -1.0f - r : r);
   }
-  const int16 maybe = centre_valid & hole & (largest * 1.0001f > guard_max_depth);
-  int16 guard_drop = 0;
+  const intW maybe = centre_valid & hole & (largest * 1.0001f > guard_max_depth);
+  intW guard_drop = 0;
   if (any(maybe)) {
-    int16 hole_again;
-    const float16 filtered =
-        emf_bilateral16(depth_in, width, height, u0, v, 1, d0, inv_two_sigma_space_sq, sigma_depth,
-                        sigma_depth_per_m2, min_depth, max_depth, &hole_again);
+    intW hole_again;
+    const floatW filtered =
+        emf_bilateral_lanes(depth_in, width, height, u0, v, 1, d0, inv_two_sigma_space_sq,
+                            sigma_depth, sigma_depth_per_m2, min_depth, max_depth, &hole_again);
     guard_drop = maybe & !(filtered <= guard_max_depth);
   }
-  emf_store16(guard_drop ? NAN : d0, guarded + v * width, u0, width);
+  emf_store_lanes(guard_drop ? NAN : d0, guarded + v * width, u0, width);
 }

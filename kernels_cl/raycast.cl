@@ -129,128 +129,126 @@ __kernel void raycast_bounds(__global const int* index, const int4 dims, const f
   }
 }
 
-/// One volume's pass (see the top of this file) for 16 consecutive pixels of a row per work
-/// item (x0 = 16 * item: one ray tile), in float16 lanes: PoCL runs a one-pixel-per-item form,
-/// whose loop length depends on the data, one pixel at a time. The lanes march together until
-/// the last one is done; per lane the operations and their order are those of one pixel's ray
-/// (the one-pixel form gave the same images to the bit). Launch ceil(width / 16) x height
-/// work items.
-__kernel void raycast_volume16(__global const int* index, __global const int* count_index,
-                               const int has_counts, const int4 dims, __global const short2* voxels,
-                               const float voxel_size, const float truncation,
-                               const float step_fraction, const float4 r0, const float4 r1,
-                               const float4 r2, const int width, const int height, const float fx,
-                               const float fy, const float cx, const float cy, const float near_z,
-                               const float far_z, const int volume_id, const float depth_margin,
-                               const int tiles_x, __global const int* tile_min,
-                               __global const int* tile_max, __global float* depth_out,
-                               __global float4* normal_out, __global int* id_out) {
-  const int x0 = get_global_id(0) * 16;
+/// One volume's pass (see the top of this file) for EMF_W consecutive pixels of a row per work
+/// item (x0 = EMF_W * item: inside one ray tile, EMF_W <= EMF_RAY_TILE), in floatW lanes: PoCL runs
+/// a one-pixel-per-item form, whose loop length depends on the data, one pixel at a time. The lanes
+/// march together until the last one is done; per lane the operations and their order are those of
+/// one pixel's ray (the one-pixel form gave the same images to the bit). Launch ceil(width / EMF_W)
+/// x height work items.
+__kernel void raycast_volume_lanes(
+    __global const int* index, __global const int* count_index, const int has_counts,
+    const int4 dims, __global const short2* voxels, const float voxel_size, const float truncation,
+    const float step_fraction, const float4 r0, const float4 r1, const float4 r2, const int width,
+    const int height, const float fx, const float fy, const float cx, const float cy,
+    const float near_z, const float far_z, const int volume_id, const float depth_margin,
+    const int tiles_x, __global const int* tile_min, __global const int* tile_max,
+    __global float* depth_out, __global float4* normal_out, __global int* id_out) {
+  const int x0 = get_global_id(0) * EMF_W;
   const int y = get_global_id(1);
   if (x0 >= width || y >= height) return;
   const int tile = (y / EMF_RAY_TILE) * tiles_x + x0 / EMF_RAY_TILE;
   const float tile_lo = as_float(tile_min[tile]);
   if (!(tile_lo < INFINITY)) return;  // no block of the volume covers this tile
-  const int16 xs = (int16)(x0) + (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  const int16 in_row = xs < width;
+  const intW xs = (intW)(x0) + EMF_LANE_IDS;
+  const intW in_row = xs < width;
   const int row = y * width;
-  float16 current;
-#define RC16_READ(l) current.s##l = in_row.s##l ? depth_out[row + xs.s##l] : NAN;
-  EMF_LANES16(RC16_READ)
-#undef RC16_READ
+  floatW current;
+#define RCW_READ(l) current.s##l = in_row.s##l ? depth_out[row + xs.s##l] : NAN;
+  EMF_LANES(RCW_READ)
+#undef RCW_READ
   // emf_pixel_ray and emf_rotate per lane (ray.z = 1).
-  const float16 rx = (convert_float16(xs) - cx) / fx;
+  const floatW rx = (convert_floatW(xs) - cx) / fx;
   const float ry = ((float)y - cy) / fy;
   const float3 o = (float3)(r0.w, r1.w, r2.w);
-  const float16 dx = r0.x * rx + r0.y * ry + r0.z * 1.0f;
-  const float16 dy = r1.x * rx + r1.y * ry + r1.z * 1.0f;
-  const float16 dz = r2.x * rx + r2.y * ry + r2.z * 1.0f;
-  float16 t0 = (float16)fmax(near_z, tile_lo);
-  float16 t1 = (float16)fmin(far_z, as_float(tile_max[tile]));
+  const floatW dx = r0.x * rx + r0.y * ry + r0.z * 1.0f;
+  const floatW dy = r1.x * rx + r1.y * ry + r1.z * 1.0f;
+  const floatW dz = r2.x * rx + r2.y * ry + r2.z * 1.0f;
+  floatW t0 = (floatW)fmax(near_z, tile_lo);
+  floatW t1 = (floatW)fmin(far_z, as_float(tile_max[tile]));
   t1 = isnan(current) ? t1 : fmin(t1, current + depth_margin);
   const float block_m = (float)EMF_BLOCK * voxel_size;
-  int16 active = in_row;
+  intW active = in_row;
   // emf_clip_slab per axis and lane.
-#define RC16_SLAB(oc, dc, hi)                        \
+#define RCW_SLAB(oc, dc, hi)                         \
   {                                                  \
-    const int16 flat = dc == 0.0f;                   \
+    const intW flat = dc == 0.0f;                    \
     active &= !flat | ((oc >= 0.0f) & (oc <= (hi))); \
-    const float16 ta = (0.0f - oc) / dc;             \
-    const float16 tb = ((hi)-oc) / dc;               \
+    const floatW ta = (0.0f - oc) / dc;              \
+    const floatW tb = ((hi)-oc) / dc;                \
     t0 = flat ? t0 : fmax(t0, fmin(ta, tb));         \
     t1 = flat ? t1 : fmin(t1, fmax(ta, tb));         \
   }
-  RC16_SLAB(o.x, dx, (float)dims.x * block_m)
-  RC16_SLAB(o.y, dy, (float)dims.y * block_m)
-  RC16_SLAB(o.z, dz, (float)dims.z * block_m)
-#undef RC16_SLAB
+  RCW_SLAB(o.x, dx, (float)dims.x * block_m)
+  RCW_SLAB(o.y, dy, (float)dims.y * block_m)
+  RCW_SLAB(o.z, dz, (float)dims.z * block_m)
+#undef RCW_SLAB
   active &= t0 < t1;
   if (!any(active)) return;
 
-  const float16 ray_len = sqrt(rx * rx + ry * ry + 1.0f * 1.0f);
-  const float16 voxel_t = voxel_size / ray_len;
+  const floatW ray_len = sqrt(rx * rx + ry * ry + 1.0f * 1.0f);
+  const floatW voxel_t = voxel_size / ray_len;
   const float inv_voxel = 1.0f / voxel_size;
   const float psi_scale = truncation / EMF_TSDF_SCALE;
-  const float16 inv_dx = 1.0f / dx, inv_dy = 1.0f / dy, inv_dz = 1.0f / dz;
-  int16 bx_c = -1, by_c = -1, bz_c = -1;  // the block of the cached slot
-  int16 slot = -1;
-  int16 prev_ok = 0, found = 0;
-  float16 prev_t = 0.0f, prev_psi = 0.0f, psi_hit = 0.0f;
-  float16 t = t0;
+  const floatW inv_dx = 1.0f / dx, inv_dy = 1.0f / dy, inv_dz = 1.0f / dz;
+  intW bx_c = -1, by_c = -1, bz_c = -1;  // the block of the cached slot
+  intW slot = -1;
+  intW prev_ok = 0, found = 0;
+  floatW prev_t = 0.0f, prev_psi = 0.0f, psi_hit = 0.0f;
+  floatW t = t0;
   while (true) {
     active &= t < t1;
     if (!any(active)) break;
-    const float16 px = o.x + dx * t, py = o.y + dy * t, pz = o.z + dz * t;
-    const float16 gx = px * inv_voxel, gy = py * inv_voxel, gz = pz * inv_voxel;
-    const int16 off_box = active & ((gx < 0.0f) | (gy < 0.0f) | (gz < 0.0f));
-    const int16 go = active & !off_box;
+    const floatW px = o.x + dx * t, py = o.y + dy * t, pz = o.z + dz * t;
+    const floatW gx = px * inv_voxel, gy = py * inv_voxel, gz = pz * inv_voxel;
+    const intW off_box = active & ((gx < 0.0f) | (gy < 0.0f) | (gz < 0.0f));
+    const intW go = active & !off_box;
     // floor: g >= 0 on the lanes that use it.
-    const int16 vx = convert_int16(go ? gx : 0.0f), vy = convert_int16(go ? gy : 0.0f),
-                vz = convert_int16(go ? gz : 0.0f);
-    const int16 bx = vx / EMF_BLOCK, by = vy / EMF_BLOCK, bz = vz / EMF_BLOCK;
-    const int16 changed = go & ((bx != bx_c) | (by != by_c) | (bz != bz_c));
+    const intW vx = convert_intW(go ? gx : 0.0f), vy = convert_intW(go ? gy : 0.0f),
+               vz = convert_intW(go ? gz : 0.0f);
+    const intW bx = vx / EMF_BLOCK, by = vy / EMF_BLOCK, bz = vz / EMF_BLOCK;
+    const intW changed = go & ((bx != bx_c) | (by != by_c) | (bz != bz_c));
     bx_c = changed ? bx : bx_c;
     by_c = changed ? by : by_c;
     bz_c = changed ? bz : bz_c;
-#define RC16_SLOT(l)                                                               \
+#define RCW_SLOT(l)                                                                \
   if (changed.s##l) {                                                              \
     slot.s##l = emf_block_slot(index, dims, (int4)(bx.s##l, by.s##l, bz.s##l, 0)); \
   }
-    EMF_LANES16(RC16_SLOT)
-#undef RC16_SLOT
-    const int16 empty = go & (slot < 0);
-    const int16 in_block = go & (slot >= 0);
-    int16 raw = 0;
-    const int16 addr = slot * EMF_BLOCK_VOXELS + (vx - bx * EMF_BLOCK) +
-                       EMF_BLOCK * ((vy - by * EMF_BLOCK) + EMF_BLOCK * (vz - bz * EMF_BLOCK));
+    EMF_LANES(RCW_SLOT)
+#undef RCW_SLOT
+    const intW empty = go & (slot < 0);
+    const intW in_block = go & (slot >= 0);
+    intW raw = 0;
+    const intW addr = slot * EMF_BLOCK_VOXELS + (vx - bx * EMF_BLOCK) +
+                      EMF_BLOCK * ((vy - by * EMF_BLOCK) + EMF_BLOCK * (vz - bz * EMF_BLOCK));
     __global const int* words = (__global const int*)voxels;
-#define RC16_VOXEL(l) \
+#define RCW_VOXEL(l) \
   if (in_block.s##l) raw.s##l = words[addr.s##l];
-    EMF_LANES16(RC16_VOXEL)
-#undef RC16_VOXEL
-    const int16 observed = in_block & (EMF_WORD_WEIGHT(raw) > 0);
-    const int16 unobserved = in_block & !observed;
-    const float16 psi = convert_float16(EMF_WORD_TSDF(raw)) * psi_scale;
-    const int16 crossing = observed & prev_ok & (prev_psi > 0.0f) & (psi <= 0.0f);
-    const int16 step = observed & !crossing;
+    EMF_LANES(RCW_VOXEL)
+#undef RCW_VOXEL
+    const intW observed = in_block & (EMF_WORD_WEIGHT(raw) > 0);
+    const intW unobserved = in_block & !observed;
+    const floatW psi = convert_floatW(EMF_WORD_TSDF(raw)) * psi_scale;
+    const intW crossing = observed & prev_ok & (prev_psi > 0.0f) & (psi <= 0.0f);
+    const intW step = observed & !crossing;
     // The block exit of empty lanes (emf_block_exit per lane).
-    float16 te = INFINITY;
-#define RC16_EXIT(dc, inv, b, oc)                                                    \
-  {                                                                                  \
-    const float16 c = (convert_float16(dc > 0.0f ? b + 1 : b) * block_m - oc) * inv; \
-    te = ((dc != 0.0f) & (c > t)) ? fmin(te, c) : te;                                \
+    floatW te = INFINITY;
+#define RCW_EXIT(dc, inv, b, oc)                                                   \
+  {                                                                                \
+    const floatW c = (convert_floatW(dc > 0.0f ? b + 1 : b) * block_m - oc) * inv; \
+    te = ((dc != 0.0f) & (c > t)) ? fmin(te, c) : te;                              \
   }
-    RC16_EXIT(dx, inv_dx, bx, o.x)
-    RC16_EXIT(dy, inv_dy, by, o.y)
-    RC16_EXIT(dz, inv_dz, bz, o.z)
-#undef RC16_EXIT
-    const float16 t_step =
-        t + (psi > 0.0f ? fmax((float16)voxel_size, step_fraction * psi) : (float16)voxel_size) /
-                ray_len;
-    const float16 t_next = (off_box | unobserved)
-                               ? t + voxel_t
-                               : (empty ? fmax(te, t) + 0.01f * voxel_t : (step ? t_step : t));
-    prev_ok = (off_box | empty | unobserved) ? 0 : (step ? (int16)(-1) : prev_ok);
+    RCW_EXIT(dx, inv_dx, bx, o.x)
+    RCW_EXIT(dy, inv_dy, by, o.y)
+    RCW_EXIT(dz, inv_dz, bz, o.z)
+#undef RCW_EXIT
+    const floatW t_step =
+        t +
+        (psi > 0.0f ? fmax((floatW)voxel_size, step_fraction * psi) : (floatW)voxel_size) / ray_len;
+    const floatW t_next = (off_box | unobserved)
+                              ? t + voxel_t
+                              : (empty ? fmax(te, t) + 0.01f * voxel_t : (step ? t_step : t));
+    prev_ok = (off_box | empty | unobserved) ? 0 : (step ? (intW)(-1) : prev_ok);
     prev_psi = step ? psi : prev_psi;
     prev_t = step ? t : prev_t;
     psi_hit = crossing ? psi : psi_hit;
@@ -261,21 +259,21 @@ __kernel void raycast_volume16(__global const int* index, __global const int* co
   if (!any(found)) return;
   // The surface between prev_t and t of the lanes that found one: the secant point, then one
   // Newton step along the ray on the trilinear SDF (its gradient gives d psi / dt).
-  float16 th = prev_t + (t - prev_t) * (prev_psi / (prev_psi - psi_hit));
-  float16 hx = o.x + dx * th, hy = o.y + dy * th, hz = o.z + dz * th;
-  float16 w_unused, gxh, gyh, gzh;
-  const float16 sh = emf_sample_sdf16(index, dims, voxels, voxel_size, truncation, hx, hy, hz,
-                                      &w_unused, &gxh, &gyh, &gzh);
-  int16 hit = found & !isnan(sh);
-  const float16 slope = gxh * dx + gyh * dy + gzh * dz;
-  const float16 tn = th - sh / slope;
-  const int16 newton = hit & (slope < 0.0f) & (tn > prev_t - voxel_t) & (tn < t + voxel_t);
+  floatW th = prev_t + (t - prev_t) * (prev_psi / (prev_psi - psi_hit));
+  floatW hx = o.x + dx * th, hy = o.y + dy * th, hz = o.z + dz * th;
+  floatW w_unused, gxh, gyh, gzh;
+  const floatW sh = emf_sample_sdf_lanes(index, dims, voxels, voxel_size, truncation, hx, hy, hz,
+                                         &w_unused, &gxh, &gyh, &gzh);
+  intW hit = found & !isnan(sh);
+  const floatW slope = gxh * dx + gyh * dy + gzh * dz;
+  const floatW tn = th - sh / slope;
+  const intW newton = hit & (slope < 0.0f) & (tn > prev_t - voxel_t) & (tn < t + voxel_t);
   if (any(newton)) {
-    const float16 nx = o.x + dx * tn, ny = o.y + dy * tn, nz = o.z + dz * tn;
-    float16 gxn, gyn, gzn;
-    const float16 sn = emf_sample_sdf16(index, dims, voxels, voxel_size, truncation, nx, ny, nz,
-                                        &w_unused, &gxn, &gyn, &gzn);
-    const int16 take = newton & !isnan(sn);
+    const floatW nx = o.x + dx * tn, ny = o.y + dy * tn, nz = o.z + dz * tn;
+    floatW gxn, gyn, gzn;
+    const floatW sn = emf_sample_sdf_lanes(index, dims, voxels, voxel_size, truncation, nx, ny, nz,
+                                           &w_unused, &gxn, &gyn, &gzn);
+    const intW take = newton & !isnan(sn);
     th = take ? tn : th;
     hx = take ? nx : hx;
     hy = take ? ny : hy;
@@ -284,24 +282,24 @@ __kernel void raycast_volume16(__global const int* index, __global const int* co
     gyh = take ? gyn : gyh;
     gzh = take ? gzn : gzh;
   }
-  const float16 grad_len = sqrt(gxh * gxh + gyh * gyh + gzh * gzh);
+  const floatW grad_len = sqrt(gxh * gxh + gyh * gyh + gzh * gzh);
   hit &= grad_len > 0.0f;
   if (has_counts && any(hit)) {
-    hit &= emf_sample_pfg16(count_index, dims, voxels, voxel_size, hx, hy, hz) > 0.5f;
+    hit &= emf_sample_pfg_lanes(count_index, dims, voxels, voxel_size, hx, hy, hz) > 0.5f;
   }
   hit &= th < t1;
-  const float16 ux = gxh / grad_len, uy = gyh / grad_len, uz = gzh / grad_len;
+  const floatW ux = gxh / grad_len, uy = gyh / grad_len, uz = gzh / grad_len;
   // emf_rotate_inverse per lane.
-  const float16 nx_c = r0.x * ux + r1.x * uy + r2.x * uz;
-  const float16 ny_c = r0.y * ux + r1.y * uy + r2.y * uz;
-  const float16 nz_c = r0.z * ux + r1.z * uy + r2.z * uz;
-#define RC16_WRITE(l)                                                    \
+  const floatW nx_c = r0.x * ux + r1.x * uy + r2.x * uz;
+  const floatW ny_c = r0.y * ux + r1.y * uy + r2.y * uz;
+  const floatW nz_c = r0.z * ux + r1.z * uy + r2.z * uz;
+#define RCW_WRITE(l)                                                     \
   if (hit.s##l) {                                                        \
     const int pixel = row + xs.s##l;                                     \
     depth_out[pixel] = th.s##l;                                          \
     normal_out[pixel] = (float4)(nx_c.s##l, ny_c.s##l, nz_c.s##l, 0.0f); \
     id_out[pixel] = volume_id;                                           \
   }
-  EMF_LANES16(RC16_WRITE)
-#undef RC16_WRITE
+  EMF_LANES(RCW_WRITE)
+#undef RCW_WRITE
 }

@@ -28,33 +28,34 @@ __kernel void sample_sdf_points(__global const int* index, __global const int* c
   pfg_out[i] = has_counts ? emf_sample_pfg(count_index, dims, voxels, voxel_size, p) : 1.0f;
 }
 
-// The same through emf_sample_sdf16 and emf_sample_pfg16 (16 points per work item, explicit
-// SIMD; what track_accumulate and estep_likelihood16 use). Launch ceil(count / 16) work items.
-__kernel void sample_sdf_points16(__global const int* index, __global const int* count_index,
-                                  const int has_counts, const int4 dims,
-                                  __global const short2* voxels, const float voxel_size,
-                                  const float truncation, __global const float4* points,
-                                  const int count, __global float* psi_out,
-                                  __global float* weight_out, __global float4* gradient_out,
-                                  __global float* pfg_out) {
-  const int i0 = get_global_id(0) * 16;
+// The same through emf_sample_sdf_lanes and emf_sample_pfg_lanes (EMF_W points per work
+// item, explicit SIMD; what track_accumulate and estep_likelihood_lanes use). Launch
+// ceil(count / EMF_W) work items.
+__kernel void sample_sdf_points_lanes(__global const int* index, __global const int* count_index,
+                                      const int has_counts, const int4 dims,
+                                      __global const short2* voxels, const float voxel_size,
+                                      const float truncation, __global const float4* points,
+                                      const int count, __global float* psi_out,
+                                      __global float* weight_out, __global float4* gradient_out,
+                                      __global float* pfg_out) {
+  const int i0 = get_global_id(0) * EMF_W;
   if (i0 >= count) return;
-  float16 px, py, pz;
-#define SDF16_LOAD(l)                                    \
+  floatW px, py, pz;
+#define SDFW_LOAD(l)                                     \
   {                                                      \
     const float4 p = points[min(i0 + 0x##l, count - 1)]; \
     px.s##l = p.x;                                       \
     py.s##l = p.y;                                       \
     pz.s##l = p.z;                                       \
   }
-  EMF_LANES16(SDF16_LOAD)
-#undef SDF16_LOAD
-  float16 weight, gx, gy, gz;
-  const float16 psi = emf_sample_sdf16(index, dims, voxels, voxel_size, truncation, px, py, pz,
-                                       &weight, &gx, &gy, &gz);
-  const float16 pfg =
-      has_counts ? emf_sample_pfg16(count_index, dims, voxels, voxel_size, px, py, pz) : 1.0f;
-#define SDF16_STORE(l)                                                                  \
+  EMF_LANES(SDFW_LOAD)
+#undef SDFW_LOAD
+  floatW weight, gx, gy, gz;
+  const floatW psi = emf_sample_sdf_lanes(index, dims, voxels, voxel_size, truncation, px, py, pz,
+                                          &weight, &gx, &gy, &gz);
+  const floatW pfg =
+      has_counts ? emf_sample_pfg_lanes(count_index, dims, voxels, voxel_size, px, py, pz) : 1.0f;
+#define SDFW_STORE(l)                                                                   \
   if (i0 + 0x##l < count) {                                                             \
     const bool ok = emf_is_valid(psi.s##l);                                             \
     psi_out[i0 + 0x##l] = psi.s##l;                                                     \
@@ -63,6 +64,6 @@ __kernel void sample_sdf_points16(__global const int* index, __global const int*
     gradient_out[i0 + 0x##l] =                                                          \
         ok ? (float4)(gx.s##l, gy.s##l, gz.s##l, 0.0f) : (float4)(NAN, NAN, NAN, 0.0f); \
   }
-  EMF_LANES16(SDF16_STORE)
-#undef SDF16_STORE
+  EMF_LANES(SDFW_STORE)
+#undef SDFW_STORE
 }

@@ -8,11 +8,13 @@
 // in it), Huber weight h = min(1, delta / |r|), rho = Huber cost. Jacobian w.r.t. a
 // left-multiplied increment (v, w), translation first: J = (grad, x cross grad), x = T p.
 //
-// One work item per 16 consecutive sampled pixels of a row (the lanes of 16-wide vectors), on a
-// 2D range over the sampled grid (or a rectangle of it): no loops and no early exits. Lanes outside
-// the grid or without a valid sample contribute zeros. Each item folds its 16 lanes per term to 8,
-// the work-group then adds up its 16 items' terms in local memory (then the 8 lanes) and writes one
-// row of TRACK_TERMS partials:
+// One work item per 16 consecutive sampled pixels of a row, on a 2D range over the sampled grid
+// (or a rectangle of it): no loops and no early exits. The item takes its pixels in 16 / EMF_W
+// chunks of EMF_W lanes (floatW, common.clh). Lanes outside the grid or without a valid sample
+// contribute zeros. Each item folds its 16 pixels per term to 8 (pixels l and l + 8 added), the
+// work-group then adds up its 16 items' terms in local memory (then the 8 lanes) and writes one
+// row of TRACK_TERMS partials. The order of every sum is the same at every EMF_W, so the
+// normal equations, and the poses, are the same to the bit on every CPU:
 //   [0, 21)  upper triangle of H = sum c h J J^T (row-major: 00 01 .. 05 11 12 .. 55)
 //   [21, 27) g = sum c h J r
 //   27 cost = sum c rho(r)      28 valid samples
@@ -44,9 +46,21 @@
 #if TRACK_ITEMS != 16
 #error "track_accumulate's final reduction is written for 16 work items per group"
 #endif
+#define TRACK_COLS 16  // sampled columns per work item
 
-// Lanes l and l + 8 of a term added (the first step of its sum over the lanes).
-__attribute__((always_inline)) inline float8 track_fold(const float16 v) { return v.lo + v.hi; }
+// Term k of chunk c (lanes = columns c EMF_W + l) into the item's 8 folded lanes `mine`: columns
+// l and l + 8 added (the first step of the term's sum over the columns). sel(a, b) is fmax for
+// the max term, + for the others.
+#if EMF_W == 16
+#define TRACK_FOLD(mine, k, c, value, sel) mine[TRACK_ITEMS * (k)] = sel((value).lo, (value).hi)
+#else
+#define TRACK_FOLD(mine, k, c, value, sel)                                                   \
+  {                                                                                          \
+    __local floatW* half_ = (__local floatW*)(mine + TRACK_ITEMS * (k)) + (c) % (8 / EMF_W); \
+    *half_ = (c) < 8 / EMF_W ? (value) : sel(*half_, (value));                               \
+  }
+#endif
+#define TRACK_ADD(a, b) ((a) + (b))
 
 // Sum (max for TRACK_MAX_TERM) of term t over the 16 items' (folded) vectors of a group, then
 // over the 8 lanes, written to row[t].
@@ -68,30 +82,22 @@ __attribute__((always_inline)) inline void track_reduce_term(__local const float
   }
 }
 
-__kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track_accumulate(
-    __global const float4* vertex, __global const float* q, const int width, const int height,
-    const int stride, const int su0, const int sv0, const int su1, const int sv1, const float4 r0,
+// Chunk `chunk` of a work item's TRACK_COLS columns (row sv): its pixels' costs and weights, and
+// its terms folded into the item's slots `mine` (see TRACK_FOLD).
+__attribute__((always_inline)) inline void track_chunk(
+    const int chunk, __global const float4* vertex, __global const float* q, const int width,
+    const int stride, const int su0, const int sv, const int su1, const int sv1, const float4 r0,
     const float4 r1, const float4 r2, __global const int* index, const int4 dims,
     __global const short2* voxels, const float voxel_size, const float truncation,
     const float huber_delta, const float inlier_delta, const float inlier_noise,
     __global const float* prev_cost, __global float* pixel_cost, __global const float* prev_weight,
     __global float* pixel_weight, const int compare, const int fixed_weights,
-    __global float* partials) {
-  // Term t of item k, its 16 lanes (pixels) folded to 8 (lanes l and l + 8 added):
-  // shared[t * TRACK_ITEMS + k]. 36 x 16 float8 = 18 KiB of local memory (OpenCL 1.2
-  // guarantees 32 KiB; unfolded float16, 35 KiB, did not fit there).
-  __local float8 shared[TRACK_TERMS * TRACK_ITEMS];
-  (void)height;  // the host's sampled-grid bounds (sv1) already keep rows inside the image
-  const int lid = get_local_id(0) + TRACK_LX * get_local_id(1);
-  // The launch covers the sampled grid cells [su0, su1) x [sv0, sv1) (within the
-  // ceil(width / stride) x ceil(height / stride) grid; the host's region of interest).
-  const int sv = sv0 + (int)get_global_id(1);
-  const int16 su = (int16)(su0 + (int)get_global_id(0) * 16) +
-                   (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  const int16 in_grid = (su < su1) & (int16)(sv < sv1 ? -1 : 0);
+    __local float8* mine) {
+  const intW su = (intW)(su0 + (int)get_global_id(0) * TRACK_COLS + chunk * EMF_W) + EMF_LANE_IDS;
+  const intW in_grid = (su < su1) & (intW)(sv < sv1 ? -1 : 0);
   // Pixel of each lane (0 outside the sampled grid, so that every read stays valid).
-  const int16 pix = in_grid ? sv * stride * width + su * stride : 0;
-  float16 px, py, pz, pw, qu, prev, prev_c = 0.0f;
+  const intW pix = in_grid ? sv * stride * width + su * stride : 0;
+  floatW px, py, pz, pw, qu, prev, prev_c = 0.0f;
 #define TRACK_LOAD(l)                  \
   {                                    \
     const float4 p = vertex[pix.s##l]; \
@@ -102,55 +108,54 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
     qu.s##l = q[pix.s##l];             \
     prev.s##l = prev_cost[pix.s##l];   \
   }
-  EMF_LANES16(TRACK_LOAD)
+  EMF_LANES(TRACK_LOAD)
 #undef TRACK_LOAD
   // The weights only with fixed_weights (the camera's evaluation keeps its memory traffic).
 #define TRACK_LOAD_WEIGHT(l) prev_c.s##l = prev_weight[pix.s##l];
   if (fixed_weights) {
-    EMF_LANES16(TRACK_LOAD_WEIGHT)
+    EMF_LANES(TRACK_LOAD_WEIGHT)
   }
 #undef TRACK_LOAD_WEIGHT
-  const int16 input = in_grid & (pw > 0.0f) & (qu > 0.0f);
-  const float16 x = r0.x * px + r0.y * py + r0.z * pz + r0.w;
-  const float16 y = r1.x * px + r1.y * py + r1.z * pz + r1.w;
-  const float16 z = r2.x * px + r2.y * py + r2.z * pz + r2.w;
-  // Sixteen pixels none of which is an input (an object's pixels behind its grid, q = 0) skip
+  const intW input = in_grid & (pw > 0.0f) & (qu > 0.0f);
+  const floatW x = r0.x * px + r0.y * py + r0.z * pz + r0.w;
+  const floatW y = r1.x * px + r1.y * py + r1.z * pz + r1.w;
+  const floatW z = r2.x * px + r2.y * py + r2.z * pz + r2.w;
+  // A chunk none of whose pixels is an input (an object's pixels behind its grid, q = 0) skips
   // the sampling: every term below is masked by `valid` there.
-  float16 weight = 0.0f, gx = 0.0f, gy = 0.0f, gz = 0.0f;
-  float16 r_raw = NAN;
+  floatW weight = 0.0f, gx = 0.0f, gy = 0.0f, gz = 0.0f;
+  floatW r_raw = NAN;
   if (any(input)) {
-    r_raw = emf_sample_sdf16(index, dims, voxels, voxel_size, truncation, x, y, z, &weight, &gx,
-                             &gy, &gz);
+    r_raw = emf_sample_sdf_lanes(index, dims, voxels, voxel_size, truncation, x, y, z, &weight, &gx,
+                                 &gy, &gz);
   }
-  const int16 valid = input & !isnan(r_raw);
+  const intW valid = input & !isnan(r_raw);
   // Lanes without a valid sample continue with zeros and are masked out of every term.
-  const float16 r = valid ? r_raw : 0.0f;
-  const float16 abs_r = fabs(r);
-  const int16 inlier = abs_r <= huber_delta;
-  const float16 c = valid ? qu * weight : 0.0f;
-  const float16 rho = inlier ? 0.5f * r * r : huber_delta * (abs_r - 0.5f * huber_delta);
-  const float16 cost = c * rho;
-  const float16 own_cost = valid ? cost : NAN;
+  const floatW r = valid ? r_raw : 0.0f;
+  const floatW abs_r = fabs(r);
+  const intW inlier = abs_r <= huber_delta;
+  const floatW c = valid ? qu * weight : 0.0f;
+  const floatW rho = inlier ? 0.5f * r * r : huber_delta * (abs_r - 0.5f * huber_delta);
+  const floatW cost = c * rho;
+  const floatW own_cost = valid ? cost : NAN;
 #define TRACK_STORE(l) \
   if (in_grid.s##l) pixel_cost[pix.s##l] = own_cost.s##l;
-  EMF_LANES16(TRACK_STORE)
+  EMF_LANES(TRACK_STORE)
 #undef TRACK_STORE
 #define TRACK_STORE_WEIGHT(l) \
   if (in_grid.s##l) pixel_weight[pix.s##l] = c.s##l;
   if (fixed_weights) {
-    EMF_LANES16(TRACK_STORE_WEIGHT)
+    EMF_LANES(TRACK_STORE_WEIGHT)
   }
 #undef TRACK_STORE_WEIGHT
-  const int16 common = valid & (int16)(compare ? -1 : 0) & !isnan(prev);
-  const float16 hw = c * (inlier ? 1.0f : huber_delta / abs_r);
-  const float16 j0 = valid ? gx : 0.0f, j1 = valid ? gy : 0.0f, j2 = valid ? gz : 0.0f;
+  const intW common = valid & (intW)(compare ? -1 : 0) & !isnan(prev);
+  const floatW hw = c * (inlier ? 1.0f : huber_delta / abs_r);
+  const floatW j0 = valid ? gx : 0.0f, j1 = valid ? gy : 0.0f, j2 = valid ? gz : 0.0f;
   // x cross grad (x may be NaN where the vertex is invalid).
-  const float16 j3 = valid ? y * j2 - z * j1 : 0.0f;
-  const float16 j4 = valid ? z * j0 - x * j2 : 0.0f;
-  const float16 j5 = valid ? x * j1 - y * j0 : 0.0f;
-  __local float8* mine = shared + lid;
-#define TRACK_PUT(k, value) mine[TRACK_ITEMS * (k)] = track_fold(value)
-  const float16 w0 = hw * j0, w1 = hw * j1, w2 = hw * j2, w3 = hw * j3, w4 = hw * j4, w5 = hw * j5;
+  const floatW j3 = valid ? y * j2 - z * j1 : 0.0f;
+  const floatW j4 = valid ? z * j0 - x * j2 : 0.0f;
+  const floatW j5 = valid ? x * j1 - y * j0 : 0.0f;
+#define TRACK_PUT(k, value) TRACK_FOLD(mine, k, chunk, value, TRACK_ADD)
+  const floatW w0 = hw * j0, w1 = hw * j1, w2 = hw * j2, w3 = hw * j3, w4 = hw * j4, w5 = hw * j5;
   TRACK_PUT(0, w0 * j0);
   TRACK_PUT(1, w0 * j1);
   TRACK_PUT(2, w0 * j2);
@@ -182,14 +187,48 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
   TRACK_PUT(28, valid ? 1.0f : 0.0f);
   TRACK_PUT(29, (valid & (abs_r <= fmax(inlier_delta, inlier_noise * pz * pz))) ? qu : 0.0f);
   TRACK_PUT(30, input ? 1.0f : 0.0f);
-  const float16 max_w = valid ? weight : 0.0f;
-  mine[TRACK_ITEMS * TRACK_MAX_TERM] = fmax(max_w.lo, max_w.hi);
-  const float16 change = (fixed_weights ? prev_c * rho : cost) - prev;
+  const floatW max_w = valid ? weight : 0.0f;
+  TRACK_FOLD(mine, TRACK_MAX_TERM, chunk, max_w, fmax);
+  const floatW change = (fixed_weights ? prev_c * rho : cost) - prev;
   TRACK_PUT(32, common ? change : 0.0f);
   TRACK_PUT(33, common ? 1.0f : 0.0f);
   TRACK_PUT(34, (valid & (abs_r <= inlier_delta)) ? qu : 0.0f);
   TRACK_PUT(35, valid ? qu : 0.0f);
 #undef TRACK_PUT
+}
+
+__kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track_accumulate(
+    __global const float4* vertex, __global const float* q, const int width, const int height,
+    const int stride, const int su0, const int sv0, const int su1, const int sv1, const float4 r0,
+    const float4 r1, const float4 r2, __global const int* index, const int4 dims,
+    __global const short2* voxels, const float voxel_size, const float truncation,
+    const float huber_delta, const float inlier_delta, const float inlier_noise,
+    __global const float* prev_cost, __global float* pixel_cost, __global const float* prev_weight,
+    __global float* pixel_weight, const int compare, const int fixed_weights,
+    __global float* partials) {
+  // Term t of item k, its 16 lanes (pixels) folded to 8 (lanes l and l + 8 added):
+  // shared[t * TRACK_ITEMS + k]. 36 x 16 float8 = 18 KiB of local memory (OpenCL 1.2
+  // guarantees 32 KiB; unfolded float16, 35 KiB, did not fit there).
+  __local float8 shared[TRACK_TERMS * TRACK_ITEMS];
+  (void)height;  // the host's sampled-grid bounds (sv1) already keep rows inside the image
+  const int lid = get_local_id(0) + TRACK_LX * get_local_id(1);
+  // The launch covers the sampled grid cells [su0, su1) x [sv0, sv1) (within the
+  // ceil(width / stride) x ceil(height / stride) grid; the host's region of interest).
+  const int sv = sv0 + (int)get_global_id(1);
+  __local float8* mine = shared + lid;
+#define TRACK_CHUNK(c)                                                                         \
+  track_chunk(c, vertex, q, width, stride, su0, sv, su1, sv1, r0, r1, r2, index, dims, voxels, \
+              voxel_size, truncation, huber_delta, inlier_delta, inlier_noise, prev_cost,      \
+              pixel_cost, prev_weight, pixel_weight, compare, fixed_weights, mine);
+  TRACK_CHUNK(0)
+#if EMF_W <= 8
+  TRACK_CHUNK(1)
+#endif
+#if EMF_W == 4
+  TRACK_CHUNK(2)
+  TRACK_CHUNK(3)
+#endif
+#undef TRACK_CHUNK
   barrier(CLK_LOCAL_MEM_FENCE);
   // Work item k adds up terms k, k + 16 and k + 32 (written out, no loops: see above).
   __global float* row =

@@ -2,9 +2,9 @@
 // (docs/method.md#integration), with the per-pixel association weight q, the weight cap W_max, the
 // authors' free-space rule, and the foreground/background count update of object volumes.
 //
-// integrate_blocks: one work-group per listed block (from assign_blocks), 32 work items of 16
-// voxels each (explicit SIMD; the 16 voxels are read and stored only when one of them is
-// observed, which skips the parts of a block hidden behind the surface). Each voxel centre
+// integrate_blocks: one work-group per listed block (from assign_blocks), 512 / EMF_W work items
+// of EMF_W voxels each (explicit SIMD; an item's voxels are read and stored only when one of them
+// is observed, which skips the parts of a block hidden behind the surface). Each voxel centre
 // is projected to its nearest pixel u; with d = D(u) - z (projective distance along the camera
 // axis):
 //   d < -truncation                skipped (occluded / behind the surface)
@@ -25,7 +25,7 @@
 /// rint for |x| < 2^22 without a builtin call (round half to even, the default FP mode):
 /// adding and subtracting 1.5 * 2^23 drops the fraction bits with IEEE rounding.
 inline float emf_round_even(float x) { return (x + 12582912.0f) - 12582912.0f; }
-inline float16 emf_round_even16(float16 x) { return (x + 12582912.0f) - 12582912.0f; }
+inline floatW emf_round_even_lanes(floatW x) { return (x + 12582912.0f) - 12582912.0f; }
 
 /// Camera-frame centre of voxel `lid` (0..511, x fastest) of block `lin`: pc = (xc, yc, zc).
 #define EMF_VOXEL_IN_CAMERA(lin, lid)                                                    \
@@ -50,17 +50,18 @@ inline float16 emf_round_even16(float16 x) { return (x + 12582912.0f) - 12582912
   /* NaN depth fails every comparison. */                                                \
   const bool observed = in_view && d_meas > 0.0f && sdf >= -truncation;
 
-// integrate_blocks runs 32 work items per block, each on 16 consecutive voxels held in the
-// lanes of 16-wide vectors: PoCL does not vectorise the one-voxel-per-item form (clang's front
-// end packs pairs of its scalar operations into 2-wide vectors, which keeps the work-item loop
-// scalar), so the SIMD is spelled out. Per lane the operations are those of one voxel above.
-#define EMF_INTEGRATE_ITEMS 32
+// integrate_blocks runs EMF_BLOCK_VOXELS / EMF_W work items per block, each on EMF_W consecutive
+// voxels held in the lanes of floatW vectors (common.clh): PoCL does not vectorise the
+// one-voxel-per-item form (clang's front end packs pairs of its scalar operations into 2-wide
+// vectors, which keeps the work-item loop scalar), so the SIMD is spelled out. Per lane the
+// operations are those of one voxel above.
+#define EMF_INTEGRATE_ITEMS (EMF_BLOCK_VOXELS / EMF_W)
 
-/// A voxel word (see EMF_WORD_TSDF) from its quantised TSDF and weight (int16 lanes).
+/// A voxel word (see EMF_WORD_TSDF) from its quantised TSDF and weight (intW lanes).
 #ifdef __ENDIAN_LITTLE__
-#define EMF_MAKE_WORD16(t, w) (((t)&0xffff) | ((w) << 16))
+#define EMF_MAKE_WORDS(t, w) (((t)&0xffff) | ((w) << 16))
 #else
-#define EMF_MAKE_WORD16(t, w) (((w)&0xffff) | ((t) << 16))
+#define EMF_MAKE_WORDS(t, w) (((w)&0xffff) | ((t) << 16))
 #endif
 
 __kernel __attribute__((reqd_work_group_size(EMF_INTEGRATE_ITEMS, 1, 1))) void integrate_blocks(
@@ -76,60 +77,59 @@ __kernel __attribute__((reqd_work_group_size(EMF_INTEGRATE_ITEMS, 1, 1))) void i
   const int bz = lin / plane;
   const int by = (lin - bz * plane) / dims.x;
   const int bx = lin - bz * plane - by * dims.x;
-  // Voxels 16 * item .. 16 * item + 15 of the block (x fastest).
-  const int16 vid =
-      (int16)(get_local_id(0) * 16) + (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  const float16 px_v = (convert_float16(bx * EMF_BLOCK + (vid & 7)) + 0.5f) * voxel_size;
-  const float16 py_v = (convert_float16(by * EMF_BLOCK + ((vid >> 3) & 7)) + 0.5f) * voxel_size;
-  const float16 pz_v = (convert_float16(bz * EMF_BLOCK + (vid >> 6)) + 0.5f) * voxel_size;
-  const float16 xc = r0.x * px_v + r0.y * py_v + r0.z * pz_v + r0.w;
-  const float16 yc = r1.x * px_v + r1.y * py_v + r1.z * pz_v + r1.w;
-  const float16 zc = r2.x * px_v + r2.y * py_v + r2.z * pz_v + r2.w;
-  const float16 inv_z = 1.0f / zc;
-  const float16 u = fx * (xc * inv_z) + cx + 0.5f;
-  const float16 v = fy * (yc * inv_z) + cy + 0.5f;
-  const int16 in_view =
+  // Voxels EMF_W * item .. EMF_W * item + EMF_W - 1 of the block (x fastest).
+  const intW vid = (intW)(get_local_id(0) * EMF_W) + EMF_LANE_IDS;
+  const floatW px_v = (convert_floatW(bx * EMF_BLOCK + (vid & 7)) + 0.5f) * voxel_size;
+  const floatW py_v = (convert_floatW(by * EMF_BLOCK + ((vid >> 3) & 7)) + 0.5f) * voxel_size;
+  const floatW pz_v = (convert_floatW(bz * EMF_BLOCK + (vid >> 6)) + 0.5f) * voxel_size;
+  const floatW xc = r0.x * px_v + r0.y * py_v + r0.z * pz_v + r0.w;
+  const floatW yc = r1.x * px_v + r1.y * py_v + r1.z * pz_v + r1.w;
+  const floatW zc = r2.x * px_v + r2.y * py_v + r2.z * pz_v + r2.w;
+  const floatW inv_z = 1.0f / zc;
+  const floatW u = fx * (xc * inv_z) + cx + 0.5f;
+  const floatW v = fy * (yc * inv_z) + cy + 0.5f;
+  const intW in_view =
       (zc > 0.0f) & (u >= 0.0f) & (v >= 0.0f) & (u < (float)width) & (v < (float)height);
   // Lanes out of view read pixel 0 (converted from 0, never from NaN or out-of-range values).
-  const int16 pixel = convert_int16(in_view ? v : 0.0f) * width + convert_int16(in_view ? u : 0.0f);
-  float16 d_meas;
+  const intW pixel = convert_intW(in_view ? v : 0.0f) * width + convert_intW(in_view ? u : 0.0f);
+  floatW d_meas;
 #define EMF_INTEGRATE_READ_DEPTH(l) d_meas.s##l = depth[pixel.s##l];
-  EMF_LANES16(EMF_INTEGRATE_READ_DEPTH)
+  EMF_LANES(EMF_INTEGRATE_READ_DEPTH)
 #undef EMF_INTEGRATE_READ_DEPTH
-  const float16 sdf = d_meas - zc;
+  const floatW sdf = d_meas - zc;
   // NaN depth fails every comparison.
-  const int16 observed = in_view & (d_meas > 0.0f) & (sdf >= -truncation);
+  const intW observed = in_view & (d_meas > 0.0f) & (sdf >= -truncation);
   // Voxels out of view, without depth or hidden behind the surface keep their word: when none of
-  // the 16 is observed, neither q nor the voxels are read.
+  // the item's lanes is observed, neither q nor the voxels are read.
   if (!any(observed)) return;
-  float16 q = 1.0f;
+  floatW q = 1.0f;
   if (has_weights) {
 #define EMF_INTEGRATE_READ_Q(l) q.s##l = weights[pixel.s##l];
-    EMF_LANES16(EMF_INTEGRATE_READ_Q)
+    EMF_LANES(EMF_INTEGRATE_READ_Q)
 #undef EMF_INTEGRATE_READ_Q
   }
-  const int16 free_space = sdf > truncation;
-  float16 w = (free_space & (int16)(free_space_full_weight ? -1 : 0)) ? 1.0f : q;
+  const intW free_space = sdf > truncation;
+  floatW w = (free_space & (intW)(free_space_full_weight ? -1 : 0)) ? 1.0f : q;
   if (behind_dropoff) {
-    const float16 drop = (truncation + sdf) / (truncation - voxel_size);
+    const floatW drop = (truncation + sdf) / (truncation - voxel_size);
     w = sdf < -voxel_size ? w * (drop > 0.0f ? drop : 0.0f) : w;
   }
-  __global int* words = (__global int*)voxels + slot * EMF_BLOCK_VOXELS + get_local_id(0) * 16;
-  const int16 raw = vload16(0, words);
-  const int16 old_t = EMF_WORD_TSDF(raw);
-  const int16 old_w = EMF_WORD_WEIGHT(raw);
-  const float16 w_old = convert_float16(old_w) / EMF_WEIGHT_SCALE;
-  const float16 w_sum = w_old + w;
-  const float16 tsdf_obs = sdf * inv_truncation < 1.0f ? sdf * inv_truncation : 1.0f;
-  float16 tsdf_new = (w_old * (convert_float16(old_t) / EMF_TSDF_SCALE) + w * tsdf_obs) / w_sum;
+  __global int* words = (__global int*)voxels + slot * EMF_BLOCK_VOXELS + get_local_id(0) * EMF_W;
+  const intW raw = vloadW(0, words);
+  const intW old_t = EMF_WORD_TSDF(raw);
+  const intW old_w = EMF_WORD_WEIGHT(raw);
+  const floatW w_old = convert_floatW(old_w) / EMF_WEIGHT_SCALE;
+  const floatW w_sum = w_old + w;
+  const floatW tsdf_obs = sdf * inv_truncation < 1.0f ? sdf * inv_truncation : 1.0f;
+  floatW tsdf_new = (w_old * (convert_floatW(old_t) / EMF_TSDF_SCALE) + w * tsdf_obs) / w_sum;
   tsdf_new = tsdf_new < -1.0f ? -1.0f : (tsdf_new > 1.0f ? 1.0f : tsdf_new);
-  float16 w_new = w_sum < max_weight ? w_sum : max_weight;
+  floatW w_new = w_sum < max_weight ? w_sum : max_weight;
   w_new = w_new < 32767.0f / EMF_WEIGHT_SCALE ? w_new : 32767.0f / EMF_WEIGHT_SCALE;
-  const int16 update = observed & (w > 0.0f);
+  const intW update = observed & (w > 0.0f);
   // Converted only where updated (elsewhere tsdf_new may be NaN: 0 / 0).
-  const int16 new_t = convert_int16(emf_round_even16(update ? tsdf_new * EMF_TSDF_SCALE : 0.0f));
-  const int16 new_w = convert_int16(emf_round_even16(update ? w_new * EMF_WEIGHT_SCALE : 0.0f));
-  vstore16(update ? EMF_MAKE_WORD16(new_t, new_w) : raw, 0, words);
+  const intW new_t = convert_intW(emf_round_even_lanes(update ? tsdf_new * EMF_TSDF_SCALE : 0.0f));
+  const intW new_w = convert_intW(emf_round_even_lanes(update ? w_new * EMF_WEIGHT_SCALE : 0.0f));
+  vstoreW(update ? EMF_MAKE_WORDS(new_t, new_w) : raw, 0, words);
 }
 
 __kernel void count_blocks(__global const int* block_list, __global const int* count_index,

@@ -5,6 +5,7 @@
 #include "cl/cl_error.h"
 #include "cl/embedded_kernels.h"
 #include "cl/work_counters.h"
+#include "common/error.h"
 #include "common/log.h"
 
 namespace emf::cl {
@@ -20,9 +21,20 @@ std::string kernelName(cl_kernel k) {
   return s;
 }
 
+int chooseLanes(const std::string& key_value, const DeviceInfo& device) {
+  if (key_value == "4" || key_value == "8" || key_value == "16") return std::stoi(key_value);
+  if (key_value != "auto") {
+    throw ConfigError("cl.lanes: '" + key_value + "' is not one of auto, 4, 8, 16");
+  }
+  if (device.type != "cpu") return 16;
+  const uint32_t w = device.native_vector_width_float;
+  return w >= 16 ? 16 : (w >= 8 ? 8 : 4);
+}
+
 Context::Context(const ClOptions& options)
     : options_(options),
       selection_(selectDevice(options)),
+      lanes_(chooseLanes(options.lanes, selection_.device)),
       cache_(options.cache_dir, !options.disable_cache) {
   cl_int err = CL_SUCCESS;
   const cl_context_properties props[] = {
@@ -46,10 +58,15 @@ ProgramCacheStats Context::cacheStats() const {
   return stats_;
 }
 
-cl_program Context::program(const std::string& file, const std::string& extra_options) {
-  std::string options = "-cl-std=CL1.2";
+std::string Context::programOptions(const std::string& extra_options) const {
+  std::string options = "-cl-std=CL1.2 -DEMF_W=" + std::to_string(lanes_);
   if (!options_.build_options.empty()) options += " " + options_.build_options;
   if (!extra_options.empty()) options += " " + extra_options;
+  return options;
+}
+
+cl_program Context::program(const std::string& file, const std::string& extra_options) {
+  const std::string options = programOptions(extra_options);
   const std::string memo_key = file + "\n" + options;
   std::lock_guard<std::mutex> lock(mutex_);
   auto it = programs_.find(memo_key);

@@ -33,9 +33,11 @@ class Context {
   Context(const Context&) = delete;
   Context& operator=(const Context&) = delete;
 
-  /// The program built from kernels_cl/<file>.cl with the configured build options plus
-  /// `extra_options` (e.g. "-DBLOCK=8"). Throws ClError with the build log on failure.
+  /// The program built from kernels_cl/<file>.cl with -DEMF_W=lanes(), the configured build
+  /// options and `extra_options` (e.g. "-DBLOCK=8"). Throws ClError with the build log on failure.
   cl_program program(const std::string& file, const std::string& extra_options = "");
+  /// The clBuildProgram options program() uses with `extra_options`.
+  std::string programOptions(const std::string& extra_options = "") const;
   /// A new kernel object for `kernel_name` in kernels_cl/<file>.cl.
   KernelHandle kernel(const std::string& file, const std::string& kernel_name,
                       const std::string& extra_options = "");
@@ -53,6 +55,9 @@ class Context {
   cl_device_id deviceId() const { return selection_.device.device; }
   const DeviceInfo& device() const { return selection_.device; }
   const DeviceSelection& selection() const { return selection_; }
+  /// Lanes per work item of the explicit-SIMD kernels (EMF_W): the launches divide their pixel
+  /// or voxel counts by it.
+  int lanes() const { return lanes_; }
   const ProgramCache& cache() const { return cache_; }
   ProgramCacheStats cacheStats() const;
 
@@ -64,6 +69,7 @@ class Context {
 
   ClOptions options_;
   DeviceSelection selection_;
+  int lanes_ = 16;
   ContextHandle context_;
   QueueHandle queue_;
   ProgramCache cache_;
@@ -71,6 +77,11 @@ class Context {
   std::map<std::string, ProgramHandle> programs_;
   ProgramCacheStats stats_;
 };
+
+/// EMF_W for `device` under the key cl.lanes ("auto", "4", "8", "16"): with "auto" a CPU
+/// device's native float width (4, 8 or 16: no vector wider than its registers, whose calls
+/// would change the ABI on AVX2), 16 on other devices. Throws ConfigError on another text.
+int chooseLanes(const std::string& key_value, const DeviceInfo& device);
 
 /// Sets kernel argument `index` to `value` (a POD or cl_mem), naming the kernel on error.
 template <typename T>

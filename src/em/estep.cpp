@@ -104,7 +104,7 @@ EStep::EStep(cl::Context& ctx, const EmOptions& options, int width, int height, 
   sum_ = ctx.buffer(CL_MEM_READ_WRITE, bytes);
   best_ = ctx.buffer(CL_MEM_READ_WRITE, bytes);
   residual_ = ctx.buffer(CL_MEM_READ_WRITE, bytes);
-  likelihood16_ = ctx.kernel("estep", "estep_likelihood16");
+  likelihood_lanes_ = ctx.kernel("estep", "estep_likelihood_lanes");
   normalize_ = ctx.kernel("estep", "estep_normalize");
   clear_ = ctx.kernel("estep", "estep_clear");
   accumulate_ = ctx.kernel("estep", "estep_accumulate");
@@ -155,8 +155,7 @@ EStepCover coverOf(std::vector<cv::Rect> rects) {
   return cover;
 }
 
-// Work-group shapes: 4 x 16 items of 16 pixels (whole rows of 640 and 320 pixels), and 32 x 4
-// items of one pixel.
+// Work-group shapes: 4 x 16 items of ctx_.lanes() pixels, and 32 x 4 items of one pixel.
 constexpr size_t kLikelihoodLocalX = 4, kLikelihoodLocalY = 16;
 constexpr size_t kPixelLocalX = 32, kPixelLocalY = 4;
 }  // namespace
@@ -233,15 +232,16 @@ void EStep::enqueueLikelihood(cl_mem vertex_map, const EStepVolume& v, int i, co
   const cl_float4 claim_lo = {{v.claim.lo.x(), v.claim.lo.y(), v.claim.lo.z(), 0.0f}};
   const cl_float4 claim_hi = {{v.claim.hi.x(), v.claim.hi.y(), v.claim.hi.z(), 0.0f}};
   const cl_int pfg_mode = options_.association == Association::kPfg ? 1 : 0;
-  // 16 pixels of a row per work item.
-  cl::setArgs(likelihood16_, vertex_map, width_, rectArg(grid), rows[0], rows[1], rows[2],
+  // ctx_.lanes() pixels of a row per work item.
+  cl::setArgs(likelihood_lanes_, vertex_map, width_, rectArg(grid), rows[0], rows[1], rows[2],
               v.view.index, has_counts ? v.count_index : v.view.index, has_counts, dims, claim_lo,
               claim_hi, v.view.voxels, v.view.voxel_size_m, v.view.truncation_m,
               static_cast<float>(options_.sigma_m), static_cast<float>(options_.alpha),
               static_cast<float>(options_.p_uniform), static_cast<float>(options_.min_weight),
               pfg_mode, static_cast<cl_int>(i == 0 ? 1 : 0), cover, static_cast<cl_int>(stride),
               likelihood_[static_cast<size_t>(i)].get(), sum_.get(), best_.get(), residual_.get());
-  cl::enqueue(ctx_.queue(), likelihood16_, static_cast<size_t>((grid.width + 15) / 16),
+  cl::enqueue(ctx_.queue(), likelihood_lanes_,
+              static_cast<size_t>((grid.width + ctx_.lanes() - 1) / ctx_.lanes()),
               static_cast<size_t>(grid.height), 0, kLikelihoodLocalX, kLikelihoodLocalY);
 }
 

@@ -56,7 +56,7 @@ struct EStepHostVolume {
 };
 
 /// Likelihood p(u | i) of one camera-frame point for one volume (0 outside its grid or its
-/// claim box), the CPU mirror of estep_likelihood16 (per lane). *abs_psi receives |psi| used
+/// claim box), the CPU mirror of estep_likelihood_lanes (per lane). *abs_psi receives |psi| used
 /// (NaN outside).
 float associationLikelihood(const EStepHostVolume& volume, const Eigen::Vector3f& p_camera,
                             const EmOptions& options, float* abs_psi);
@@ -139,7 +139,7 @@ class EStep {
 
   std::vector<cl::MemHandle> q_, likelihood_;
   cl::MemHandle sum_, best_, residual_;
-  cl::KernelHandle likelihood16_, normalize_, clear_, accumulate_;
+  cl::KernelHandle likelihood_lanes_, normalize_, clear_, accumulate_;
   std::vector<ObjectKey> last_objects_, keys_;
   cl_mem last_vertex_ = nullptr;
   bool reused_ = false;

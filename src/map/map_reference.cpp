@@ -242,7 +242,7 @@ TileRanges tileRangesReference(const VolumeHostData& vol, const CameraF& cam, co
 
 namespace {
 
-/// raycast_volume16 for one pixel (one lane).
+/// raycast_volume_lanes for one pixel (one lane).
 void castPixel(const VolumeHostData& vol, int id, float depth_margin, const TileRanges& tiles,
                const CameraF& cam, const PoseRows& T, const MapOptions& options, int x, int y,
                RaycastImages* out) {

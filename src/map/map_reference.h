@@ -56,7 +56,7 @@ struct TileRanges {
 TileRanges tileRangesReference(const VolumeHostData& vol, const CameraF& cam,
                                const PoseRows& T_camera_volume, const MapOptions& options);
 
-/// raycast_clear + raycast_bounds + raycast_volume16 for each item in order.
+/// raycast_clear + raycast_bounds + raycast_volume_lanes for each item in order.
 RaycastImages raycastReference(const std::vector<HostRenderItem>& volumes, const CameraF& cam,
                                const Eigen::Isometry3d& T_world_camera, const MapOptions& options);
 

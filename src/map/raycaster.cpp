@@ -30,7 +30,7 @@ RayCaster::RayCaster(cl::Context& ctx, const MapOptions& options, int max_width,
   clear_ = ctx_.kernel("raycast", "raycast_clear");
   clear_bounds_ = ctx_.kernel("raycast", "raycast_clear_bounds");
   bounds_ = ctx_.kernel("raycast", "raycast_bounds");
-  cast_ = ctx_.kernel("raycast", "raycast_volume16");
+  cast_ = ctx_.kernel("raycast", "raycast_volume_lanes");
 }
 
 void RayCaster::render(const std::vector<RenderItem>& volumes, const core::Intrinsics& k,
@@ -79,8 +79,9 @@ void RayCaster::render(const std::vector<RenderItem>& volumes, const core::Intri
                 static_cast<cl_float>(options_.raycast_max_depth_m), static_cast<cl_int>(item.id),
                 static_cast<cl_float>(item.depth_margin_m), tiles_x, tile_min_, tile_max_, depth_,
                 normals_, ids_);
-    // 16 pixels of a row per work item.
-    cl::enqueue(ctx_.queue(), cast_, static_cast<size_t>((width_ + 15) / 16),
+    // ctx_.lanes() pixels of a row per work item.
+    cl::enqueue(ctx_.queue(), cast_,
+                static_cast<size_t>((width_ + ctx_.lanes() - 1) / ctx_.lanes()),
                 static_cast<size_t>(height_), 0, 4, 16);
   }
 }

@@ -13,7 +13,6 @@ namespace emf::map {
 
 namespace {
 
-constexpr int kIntegrateItems = 32;   // work items per block in integrate_blocks (16 voxels each)
 constexpr int kCountGroup = 512;      // work items per block in count_blocks (one per voxel)
 constexpr int kVolumeStateInts = 10;  // layout in kernels_cl/map_alloc.cl (EMF_VOL_*)
 constexpr int kVolumeReport = 4;
@@ -200,9 +199,10 @@ AllocationReport Volume::allocate(const IntegrationInput& frame) {
               static_cast<cl_float>(k.cy), row4(T_volume_camera, 0), row4(T_volume_camera, 1),
               row4(T_volume_camera, 2), static_cast<cl_float>(block_m),
               static_cast<cl_float>(spec_.truncation_m), dims, mark_lo, mark_hi, needed_, state_);
-  // 16 pixels of a row per work item.
+  // ctx_.lanes() pixels of a row per work item.
   if (!rect.empty()) {
-    cl::enqueue(ctx_.queue(), mark_, static_cast<size_t>((rect.width + 15) / 16),
+    cl::enqueue(ctx_.queue(), mark_,
+                static_cast<size_t>((rect.width + ctx_.lanes() - 1) / ctx_.lanes()),
                 static_cast<size_t>(rect.height), 0, 4, 16);
   }
 
@@ -239,7 +239,9 @@ void Volume::integrate(const IntegrationInput& frame) {
       static_cast<cl_float>(spec_.voxel_size_m), static_cast<cl_float>(spec_.truncation_m),
       static_cast<cl_float>(1.0f / spec_.truncation_m), static_cast<cl_float>(o.max_weight),
       static_cast<cl_int>(spec_.free_space_full_weight), static_cast<cl_int>(spec_.behind_dropoff));
-  cl::enqueue(ctx_.queue(), integrate_, blocks * kIntegrateItems, 0, 0, kIntegrateItems);
+  // ctx_.lanes() voxels per work item.
+  const size_t items = static_cast<size_t>(kBlockVoxels / ctx_.lanes());
+  cl::enqueue(ctx_.queue(), integrate_, blocks * items, 0, 0, items);
   if (spec_.has_counts && frame.fg_mask) {
     cl::setArgs(count_, block_list_, count_index_, dimsBlocks(), pool_.voxels(), *frame.depth,
                 *frame.fg_mask, static_cast<cl_int>(k.width), static_cast<cl_int>(k.height),

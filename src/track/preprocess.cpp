@@ -230,13 +230,14 @@ void Preprocessor::process(cl_mem input_m, float frame_max_m) {
               static_cast<float>(intrinsics_.fy), static_cast<float>(intrinsics_.cx),
               static_cast<float>(intrinsics_.cy), guard_max,
               guard ? guarded_.get() : filtered_.get(), guard && stride_ == 1 ? 1 : 0);
-  // Sixteen sampled pixels per work item along x.
+  // ctx_.lanes() sampled pixels per work item along x.
+  const int lanes = ctx_.lanes();
   const int sampled_w = (intrinsics_.width + stride_ - 1) / stride_;
   const int sampled_h = (intrinsics_.height + stride_ - 1) / stride_;
-  cl::enqueue(ctx_.queue(), kernel_, static_cast<size_t>((sampled_w + 15) / 16),
+  cl::enqueue(ctx_.queue(), kernel_, static_cast<size_t>((sampled_w + lanes - 1) / lanes),
               static_cast<size_t>(sampled_h), 0, 8, 8);
   if (guard_kernel_) {
-    const size_t items_x = static_cast<size_t>((intrinsics_.width + 15) / 16);
+    const size_t items_x = static_cast<size_t>((intrinsics_.width + lanes - 1) / lanes);
     cl::setArgs(guard_rows_kernel_, depth_m, row_max_.get(), intrinsics_.width, intrinsics_.height,
                 static_cast<float>(o.min_depth_m), static_cast<float>(o.max_depth_m));
     cl::enqueue(ctx_.queue(), guard_rows_kernel_, items_x, static_cast<size_t>(intrinsics_.height),

@@ -16,7 +16,7 @@ namespace {
 constexpr int kTerms = 36;
 // Work-group shape of track_accumulate (2D over the sampled grid, each work item takes 16
 // consecutive sampled columns of one row): 2 x 8 items = 32 sampled columns x 8 rows.
-constexpr int kLanes = 16;
+constexpr int kLanes = 16;  // TRACK_COLS, whatever the kernels' lane width
 constexpr int kLocalX = 2;
 constexpr int kLocalY = 8;
 constexpr int kLocalSize = kLocalX * kLocalY;

@@ -220,7 +220,7 @@ TEST(ProgramCacheTest, CorruptEntryIsRecompiled) {
     Context first(o);
     first.program("image_scale");
     const KernelSource* k = findEmbeddedKernel("image_scale");
-    path = first.cache().pathFor(first.cacheKey(k->sha256, "-cl-std=CL1.2"));
+    path = first.cache().pathFor(first.cacheKey(k->sha256, first.programOptions()));
   }
   ASSERT_TRUE(std::filesystem::exists(path));
   { std::ofstream(path, std::ios::trunc) << "garbage"; }

@@ -309,7 +309,8 @@ TEST_P(EStepModes, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
     for (int v = 0; v < k.height; ++v) {
       for (int u = 0; u < k.width; ++u) {
         const float a = residual_objects.at<float>(v, u), b = residual_whole.at<float>(v, u);
-        // The background pass works on 16 pixels of a row: a group touching a rectangle is exact.
+        // The background pass decides per 16 pixels of a row (EMF_ESTEP_EXACT_COLS): a group
+        // touching a rectangle is exact.
         const int g0 = u / 16 * 16;
         const cv::Rect group(g0, v, 16, 1);
         if ((group & px_1).area() > 0 || (group & px_2).area() > 0) {

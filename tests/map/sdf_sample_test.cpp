@@ -22,9 +22,9 @@ class SdfSampling : public MapTest {
     std::vector<cl_float4> grad;
   };
   /// psi, weight, gradient and p_fg at `pts` through sample_sdf_points (SdfSampler), or with
-  /// `lanes16` through emf_sample_sdf16 / emf_sample_pfg16 (kernel sample_sdf_points16).
+  /// `lanes` through emf_sample_sdf_lanes / emf_sample_pfg_lanes (kernel sample_sdf_points_lanes).
   Samples sampleOnDevice(const map::Volume& vol, const std::vector<Eigen::Vector3f>& pts,
-                         bool lanes16 = false) {
+                         bool lanes = false) {
     const int n = static_cast<int>(pts.size());
     std::vector<cl_float4> p4(pts.size());
     for (size_t i = 0; i < pts.size(); ++i) p4[i] = {{pts[i].x(), pts[i].y(), pts[i].z(), 0.f}};
@@ -33,14 +33,14 @@ class SdfSampling : public MapTest {
     cl::MemHandle dw = ctx().buffer(CL_MEM_WRITE_ONLY, pts.size() * sizeof(float));
     cl::MemHandle dg = ctx().buffer(CL_MEM_WRITE_ONLY, pts.size() * sizeof(cl_float4));
     cl::MemHandle dpfg = ctx().buffer(CL_MEM_WRITE_ONLY, pts.size() * sizeof(float));
-    if (lanes16) {
-      cl::KernelHandle k = ctx().kernel("sdf_sample", "sample_sdf_points16");
+    if (lanes) {
+      cl::KernelHandle k = ctx().kernel("sdf_sample", "sample_sdf_points_lanes");
       const map::VolumeSpec& spec = vol.spec();
       cl::setArgs(k, vol.index(), vol.countIndex(), static_cast<cl_int>(spec.has_counts ? 1 : 0),
                   vol.dimsBlocks(), vol.pool().voxels(), static_cast<cl_float>(spec.voxel_size_m),
                   static_cast<cl_float>(spec.truncation_m), dp, static_cast<cl_int>(n), dpsi, dw,
                   dg, dpfg);
-      cl::enqueue(ctx().queue(), k, static_cast<size_t>((n + 15) / 16));
+      cl::enqueue(ctx().queue(), k, static_cast<size_t>((n + ctx().lanes() - 1) / ctx().lanes()));
     } else {
       map::SdfSampler sampler(ctx());
       sampler.sample(vol, dp, n, dpsi, dw, dg, dpfg);
@@ -139,17 +139,17 @@ TEST_F(SdfSampling, DeviceMatchesReferenceAcrossBlockBorders) {
   }
   const size_t n_grid_border = pts.size() - n_inner;
   const Samples d = sampleOnDevice(vol, pts);
-  const Samples d16 = sampleOnDevice(vol, pts, true);
+  const Samples dl = sampleOnDevice(vol, pts, true);
   int valid = 0, borders_valid = 0;
   for (size_t i = 0; i < pts.size(); ++i) {
     float psi = 0, w = 0;
     Eigen::Vector3f g;
     const bool ok = map::sampleSdfReference(h.view(), pts[i], &psi, &w, &g);
     ASSERT_EQ(ok, !std::isnan(d.psi[i])) << "point " << i;
-    ASSERT_EQ(ok, !std::isnan(d16.psi[i])) << "point " << i << " (16 lanes)";
+    ASSERT_EQ(ok, !std::isnan(dl.psi[i])) << "point " << i << " (lanes)";
     const float pfg_ref = map::samplePfgReference(h.view(), pts[i]);
     EXPECT_NEAR(d.pfg[i], pfg_ref, kPfgTolerance) << i;
-    EXPECT_NEAR(d16.pfg[i], pfg_ref, kPfgTolerance) << i << " (16 lanes)";
+    EXPECT_NEAR(dl.pfg[i], pfg_ref, kPfgTolerance) << i << " (lanes)";
     if (i >= n_inner) continue;  // grid-border points: p_fg only
     if (!ok) continue;
     ++valid;
@@ -157,10 +157,10 @@ TEST_F(SdfSampling, DeviceMatchesReferenceAcrossBlockBorders) {
     EXPECT_NEAR(d.psi[i], psi, kPsiToleranceM) << i;
     EXPECT_NEAR(d.weight[i], w, kWeightTolerance) << i;
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(d.grad[i].s[c], g[c], kGradientTolerance) << i;
-    EXPECT_NEAR(d16.psi[i], psi, kPsiToleranceM) << i << " (16 lanes)";
-    EXPECT_NEAR(d16.weight[i], w, kWeightTolerance) << i << " (16 lanes)";
+    EXPECT_NEAR(dl.psi[i], psi, kPsiToleranceM) << i << " (lanes)";
+    EXPECT_NEAR(dl.weight[i], w, kWeightTolerance) << i << " (lanes)";
     for (int c = 0; c < 3; ++c) {
-      EXPECT_NEAR(d16.grad[i].s[c], g[c], kGradientTolerance) << i << " (16 lanes)";
+      EXPECT_NEAR(dl.grad[i].s[c], g[c], kGradientTolerance) << i << " (lanes)";
     }
   }
   EXPECT_GT(valid, 2000);

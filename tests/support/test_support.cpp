@@ -75,7 +75,11 @@ int runCommand(const std::string& command, std::string* output) {
 }
 
 void WithClContext::SetUpTestSuite() {
-  if (!ctx_) ctx_ = std::make_unique<cl::Context>(cl::ClOptions{});
+  if (ctx_) return;
+  cl::ClOptions options;
+  // The lanes-N kernel tests (tests/CMakeLists.txt) run the kernels at every width.
+  if (const char* lanes = std::getenv("EMF_TEST_LANES")) options.lanes = lanes;
+  ctx_ = std::make_unique<cl::Context>(options);
 }
 
 void WithClContext::TearDownTestSuite() {}

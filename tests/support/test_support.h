@@ -38,7 +38,8 @@ std::string readText(const std::string& path);
 int runCommand(const std::string& command, std::string* output);
 
 /// A test with an OpenCL context on the selected device (PoCL CPU in CI). Shared across the
-/// tests of one process; never skipped: a missing device is a failure.
+/// tests of one process; never skipped: a missing device is a failure. $EMF_TEST_LANES, when
+/// set, is its cl.lanes (4, 8 or 16).
 class WithClContext : public ::testing::Test {
  protected:
   static void SetUpTestSuite();
