@@ -125,7 +125,7 @@ int main(int argc, char** argv) {
         "every %ld frames; model %s\n  %u cores; OpenCV threads %d; PoCL threads %s; device %s\n",
         scene.size(), uri.c_str(), rate, every, model.c_str(), std::thread::hardware_concurrency(),
         cv::getNumThreads(), pocl_threads ? pocl_threads : "(PoCL's default)",
-        ctx.device().describe().c_str());
+        ctx.describe().c_str());
 
     const std::vector<Setting> settings = {
         {"no detector", false},

@@ -449,7 +449,7 @@ int main(int argc, char** argv) {
     if (seq.frames.empty()) throw emf::IoError(data + ": no frames with ground-truth poses");
     emf::cl::Context ctx{emf::cl::ClOptions{}};
     std::printf("map_bench: %s, %zu frames; device %s; load average before: %s\n", data.c_str(),
-                seq.frames.size(), ctx.device().describe().c_str(), loadAverage().c_str());
+                seq.frames.size(), ctx.describe().c_str(), loadAverage().c_str());
     std::vector<Result> results;
     // The PLY files go to --mesh-dir, else to a temporary folder removed at the end.
     const bool temp_ply_dir = mesh_dir.empty();

@@ -103,7 +103,7 @@ int main(int argc, char** argv) {
       std::printf(
           "\n== %ldx%ld, %zu frames of %s\n   measured from frame %ld, on frames with "
           "exactly N objects alive; device %s\n",
-          width, height, scene.size(), uri.c_str(), warmup, ctx.device().describe().c_str());
+          width, height, scene.size(), uri.c_str(), warmup, ctx.describe().c_str());
       std::vector<Row> rows;
       for (const long n : counts) {
         emf::Config c = base;

@@ -411,7 +411,7 @@ int main(int argc, char** argv) {
   }
   try {
     emf::cl::Context ctx(emf::cl::ClOptions{});
-    std::printf("track_bench on %s\n", ctx.device().describe().c_str());
+    std::printf("track_bench on %s\n", ctx.describe().c_str());
     if (sequences_only) {
       emf::core::Intrinsics kitchen{585, 585, 320, 240, 640, 480};
       sequence(ctx, "redkitchen", data + "/redkitchen-0-299", 1000.0, kitchen, 5, 15);

@@ -354,7 +354,7 @@ int main(int argc, char** argv) {
     std::printf("objects_suite: %zu seeds of synth:random%s%s at %dx%d, %d frames; device %s\n",
                 args.seed_list.size(), args.scene_query.empty() ? "" : "?",
                 args.scene_query.c_str(), args.width, args.height, args.frames,
-                ctx.device().describe().c_str());
+                ctx.describe().c_str());
     std::printf("columns:");
     for (size_t c = 0; c < configs.size(); ++c) {
       std::printf(" [%zu] %s", c, configs[c].name.c_str());

@@ -21,20 +21,15 @@ std::string kernelName(cl_kernel k) {
   return s;
 }
 
-int chooseLanes(const std::string& key_value, const DeviceInfo& device) {
+int parseLanes(const std::string& key_value) {
   if (key_value == "4" || key_value == "8" || key_value == "16") return std::stoi(key_value);
-  if (key_value != "auto") {
-    throw ConfigError("cl.lanes: '" + key_value + "' is not one of auto, 4, 8, 16");
-  }
-  if (device.type != "cpu") return 16;
-  const uint32_t w = device.native_vector_width_float;
-  return w >= 16 ? 16 : (w >= 8 ? 8 : 4);
+  throw ConfigError("cl.lanes: '" + key_value + "' is not one of 4, 8, 16");
 }
 
 Context::Context(const ClOptions& options)
     : options_(options),
       selection_(selectDevice(options)),
-      lanes_(chooseLanes(options.lanes, selection_.device)),
+      lanes_(parseLanes(options.lanes)),
       cache_(options.cache_dir, !options.disable_cache) {
   cl_int err = CL_SUCCESS;
   const cl_context_properties props[] = {
@@ -51,6 +46,10 @@ std::string Context::cacheKey(const std::string& sha256, const std::string& buil
          "\ndevice=" + selection_.device.device_name +
          "\ndriver=" + selection_.device.driver_version +
          "\nplatform=" + selection_.device.platform_version + "\n";
+}
+
+std::string Context::describe() const {
+  return selection_.device.describe() + ", kernel lanes " + std::to_string(lanes_);
 }
 
 ProgramCacheStats Context::cacheStats() const {

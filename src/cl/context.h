@@ -58,6 +58,8 @@ class Context {
   /// Lanes per work item of the explicit-SIMD kernels (EMF_W): the launches divide their pixel
   /// or voxel counts by it.
   int lanes() const { return lanes_; }
+  /// device().describe() plus ", kernel lanes N": what the benches and run.json print.
+  std::string describe() const;
   const ProgramCache& cache() const { return cache_; }
   ProgramCacheStats cacheStats() const;
 
@@ -78,10 +80,8 @@ class Context {
   ProgramCacheStats stats_;
 };
 
-/// EMF_W for `device` under the key cl.lanes ("auto", "4", "8", "16"): with "auto" a CPU
-/// device's native float width (4, 8 or 16: no vector wider than its registers, whose calls
-/// would change the ABI on AVX2), 16 on other devices. Throws ConfigError on another text.
-int chooseLanes(const std::string& key_value, const DeviceInfo& device);
+/// EMF_W from the key cl.lanes ("4", "8" or "16"). Throws ConfigError on another text.
+int parseLanes(const std::string& key_value);
 
 /// Sets kernel argument `index` to `value` (a POD or cl_mem), naming the kernel on error.
 template <typename T>

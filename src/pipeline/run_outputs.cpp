@@ -159,7 +159,7 @@ std::string runSummaryJson(const SlamSystem& slam, const cl::Context& ctx, const
                  {"platform", ctx.device().platform_name},
                  {"driver", ctx.device().driver_version},
                  {"fallback", ctx.selection().fallback},
-                 {"description", ctx.device().describe()},
+                 {"description", ctx.describe()},
                  {"pocl_target", ctx.device().poclTarget()},
                  {"native_vector_width_float", ctx.device().native_vector_width_float}};
   const core::Intrinsics& k = slam.intrinsics();

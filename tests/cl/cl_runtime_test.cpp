@@ -11,6 +11,7 @@
 #include "cl/device.h"
 #include "cl/embedded_kernels.h"
 #include "cl/image_scale.h"
+#include "common/error.h"
 #include "test_support.h"
 
 namespace emf::cl {
@@ -65,9 +66,29 @@ TEST_F(ClRuntime, DescriptionNamesTheTargetAndTheVectorWidths) {
       d.describe().find("native vector width float " + std::to_string(d.native_vector_width_float)),
       std::string::npos)
       << d.describe();
+  EXPECT_NE(ctx().describe().find(", kernel lanes " + std::to_string(ctx().lanes())),
+            std::string::npos)
+      << ctx().describe();
   if (d.is_pocl && d.type == "cpu") {
     EXPECT_FALSE(d.poclTarget().empty()) << d.device_name;
     EXPECT_NE(d.describe().find("target " + d.poclTarget()), std::string::npos) << d.describe();
+  }
+}
+
+TEST(ClLanes, TheKeyChoosesTheWidthAndTheProgramsAreBuiltWithIt) {
+  EXPECT_EQ(ClOptions{}.lanes, "16");
+  ClOptions o;
+  o.lanes = "8";
+  Context eight(o);
+  EXPECT_EQ(eight.lanes(), 8);
+  EXPECT_NE(eight.programOptions().find("-DEMF_W=8"), std::string::npos) << eight.programOptions();
+  EXPECT_NO_THROW(eight.program("track_reduce", "-Werror"));
+  o.lanes = "12";
+  try {
+    Context twelve(o);
+    FAIL() << "12 lanes accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("cl.lanes"), std::string::npos) << e.what();
   }
 }
 
