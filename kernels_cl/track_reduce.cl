@@ -13,8 +13,8 @@
 // chunks of EMF_W lanes (floatW, common.clh). Lanes outside the grid or without a valid sample
 // contribute zeros. Each item folds its 16 pixels per term to 8 (pixels l and l + 8 added), the
 // work-group then adds up its 16 items' terms in local memory (then the 8 lanes) and writes one
-// row of TRACK_TERMS partials. The order of every sum is the same at every EMF_W, so the
-// normal equations, and the poses, are the same to the bit on every CPU:
+// row of TRACK_TERMS partials. The order of every sum is the same at every EMF_W (only the
+// compiler's fused multiply-adds round differently per width, docs/opencl.md):
 //   [0, 21)  upper triangle of H = sum c h J J^T (row-major: 00 01 .. 05 11 12 .. 55)
 //   [21, 27) g = sum c h J r
 //   27 cost = sum c rho(r)      28 valid samples
@@ -206,7 +206,7 @@ __kernel __attribute__((reqd_work_group_size(TRACK_LX, TRACK_LY, 1))) void track
     __global const float* prev_cost, __global float* pixel_cost, __global const float* prev_weight,
     __global float* pixel_weight, const int compare, const int fixed_weights,
     __global float* partials) {
-  // Term t of item k, its 16 lanes (pixels) folded to 8 (lanes l and l + 8 added):
+  // Term t of item k, its 16 pixels folded to 8 (pixels l and l + 8 added):
   // shared[t * TRACK_ITEMS + k]. 36 x 16 float8 = 18 KiB of local memory (OpenCL 1.2
   // guarantees 32 KiB; unfolded float16, 35 KiB, did not fit there).
   __local float8 shared[TRACK_TERMS * TRACK_ITEMS];
