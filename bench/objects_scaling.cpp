@@ -7,10 +7,12 @@
 // that do not depend on the machine's load: kernel launches, blocking host waits, bytes read
 // back and the objects' tracking steps (Levenberg-Marquardt evaluations of all objects) per
 // frame. Last, the marginal cost of one more object (least-squares slope over the counts that
-// were reached).
+// were reached). --kernels adds, per count, the device time and launches per measured frame of
+// each kernel (OpenCL profiling events, cl/kernel_profile.h): where the time goes on the device
+// the bench runs on, a GPU included.
 //
 //   objects_scaling [--frames N] [--seed S] [--sizes 320,640] [--counts 0,1,2,4,7]
-//                   [--warmup F]
+//                   [--warmup F] [--kernels]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -20,6 +22,7 @@
 
 #include "bench_args.h"
 #include "cl/context.h"
+#include "cl/kernel_profile.h"
 #include "core/frame_source.h"
 #include "pipeline/config.h"
 #include "pipeline/slam_system.h"
@@ -47,18 +50,68 @@ struct Row {
   size_t frames = 0;  // measured frames (exactly `objects` alive)
   double ms_median = 0, ms_p90 = 0;
   std::map<std::string, double> stage_median;
-  double launches = 0, waits = 0, mb_read = 0;  // medians per frame
-  double track_iterations = 0;                  // object tracking LM steps, median per frame
+  double launches = 0, waits = 0, mb_read = 0;         // medians per frame
+  double track_iterations = 0;                         // object tracking LM steps, median per frame
+  std::map<std::string, emf::cl::KernelTime> kernels;  // --kernels: sums over the measured frames
 };
+
+// --kernels: per kernel, device ms and launches per measured frame at each count, the kernels
+// with the most time at the largest count first.
+void printKernels(const std::vector<Row>& rows) {
+  const Row* last = nullptr;
+  for (const Row& r : rows) {
+    if (r.frames > 0) last = &r;
+  }
+  if (!last) return;
+  std::vector<std::pair<double, std::string>> order;
+  std::map<std::string, bool> seen;
+  for (const Row& r : rows) {
+    for (const auto& [name, t] : r.kernels) {
+      if (seen[name]) continue;
+      seen[name] = true;
+      const auto it = last->kernels.find(name);
+      order.push_back({it == last->kernels.end() ? 0.0 : -it->second.device_ms, name});
+    }
+  }
+  std::sort(order.begin(), order.end());
+  std::printf("   device ms per frame (launches per frame) of each kernel, by objects alive:\n");
+  std::printf("   %-28s", "kernel");
+  for (const Row& r : rows) {
+    if (r.frames > 0) std::printf(" %15ld", r.objects);
+  }
+  std::printf("\n");
+  std::vector<double> total(rows.size(), 0.0);
+  for (const auto& [unused, name] : order) {
+    std::printf("   %-28.28s", name.c_str());
+    for (size_t i = 0; i < rows.size(); ++i) {
+      const Row& r = rows[i];
+      if (r.frames == 0) continue;
+      const auto it = r.kernels.find(name);
+      const double n = static_cast<double>(r.frames);
+      const double ms = it == r.kernels.end() ? 0.0 : it->second.device_ms / n;
+      const double launches =
+          it == r.kernels.end() ? 0.0 : static_cast<double>(it->second.launches) / n;
+      total[i] += ms;
+      std::printf(" %7.3f (%5.1f)", ms, launches);
+    }
+    std::printf("\n");
+  }
+  std::printf("   %-28s", "all kernels");
+  for (size_t i = 0; i < rows.size(); ++i) {
+    if (rows[i].frames > 0) std::printf(" %7.3f        ", total[i]);
+  }
+  std::printf("\n");
+}
 
 }  // namespace
 
 constexpr const char* kUsage =
     "usage: objects_scaling [--frames N] [--seed S] [--sizes 320,640] [--counts 0,1,2,4,7] "
-    "[--warmup F]\n";
+    "[--warmup F] [--kernels]\n";
 
 int main(int argc, char** argv) {
   long frames = 120, seed = 4, warmup = 40;
+  bool kernels = false;
   std::vector<long> sizes = {320, 640}, counts = {0, 1, 2, 4, 7};
   try {
     emf::bench::ArgWalker args(argc, argv);
@@ -76,6 +129,8 @@ int main(int argc, char** argv) {
         sizes = parseList("--sizes", args.value(), 160, 1280);
       } else if (args.is("--counts")) {
         counts = parseList("--counts", args.value(), 0, 8);
+      } else if (args.is("--kernels")) {
+        kernels = true;
       } else {
         args.unknown();
       }
@@ -87,6 +142,7 @@ int main(int argc, char** argv) {
   }
   try {
     emf::Config base;
+    emf::cl::setKernelProfiling(kernels);  // before the Context: its queue takes the property
     emf::cl::Context ctx(base.cl);
     for (const long width : sizes) {
       const long height = width * 3 / 4;
@@ -112,6 +168,8 @@ int main(int argc, char** argv) {
         SlamSystem slam(ctx, c, k, uri);
         std::vector<double> ms;
         std::vector<size_t> alive_at;
+        std::vector<std::map<std::string, emf::cl::KernelTime>> kernel_at;
+        emf::cl::takeKernelProfile();  // the set-up's launches are no frame's
         for (const emf::core::Frame& frame : scene) {
           const auto t0 = std::chrono::steady_clock::now();
           const auto out = slam.process(frame, frame.detections ? &*frame.detections : nullptr);
@@ -123,6 +181,7 @@ int main(int argc, char** argv) {
             alive += o.state != ObjectState::kDeleted && o.state != ObjectState::kDormant;
           }
           alive_at.push_back(alive);
+          if (kernels) kernel_at.push_back(emf::cl::takeKernelProfile());
         }
         Row r;
         r.objects = n;
@@ -146,6 +205,12 @@ int main(int argc, char** argv) {
         r.waits = median(pick(slam.counters().samples("host_waits")));
         r.mb_read = median(pick(slam.counters().samples("bytes_read"))) / (1 << 20);
         r.track_iterations = median(pick(slam.counters().samples("object_track_iterations")));
+        for (size_t i : kernels ? use : std::vector<size_t>{}) {
+          for (const auto& [name, kt] : kernel_at[i]) {
+            r.kernels[name].launches += kt.launches;
+            r.kernels[name].device_ms += kt.device_ms;
+          }
+        }
         rows.push_back(r);
       }
       std::printf("   %-7s %6s %9s %7s |", "objects", "frames", "ms median", "p90");
@@ -164,6 +229,7 @@ int main(int argc, char** argv) {
         std::printf(" | %8.0f %6.0f %7.2f %8.0f\n", r.launches, r.waits, r.mb_read,
                     r.track_iterations);
       }
+      if (kernels) printKernels(rows);
       // Least-squares slope over the rows that were measured.
       double sx = 0, sy = 0, sxx = 0, sxy = 0, sl = 0, slx = 0, sw = 0, swx = 0;
       int m = 0;

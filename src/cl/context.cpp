@@ -4,6 +4,7 @@
 
 #include "cl/cl_error.h"
 #include "cl/embedded_kernels.h"
+#include "cl/kernel_profile.h"
 #include "cl/work_counters.h"
 #include "common/error.h"
 #include "common/log.h"
@@ -37,7 +38,9 @@ Context::Context(const ClOptions& options)
   cl_device_id dev = selection_.device.device;
   context_ = ContextHandle(clCreateContext(props, 1, &dev, nullptr, nullptr, &err));
   check(err, "clCreateContext(" + selection_.device.device_name + ")");
-  queue_ = QueueHandle(clCreateCommandQueue(context_.get(), dev, 0, &err));
+  const cl_command_queue_properties queue_props =
+      kernelProfiling() ? CL_QUEUE_PROFILING_ENABLE : 0;  // the benchmarks' kernel profile
+  queue_ = QueueHandle(clCreateCommandQueue(context_.get(), dev, queue_props, &err));
   check(err, "clCreateCommandQueue(" + selection_.device.device_name + ")");
 }
 
@@ -200,10 +203,14 @@ void enqueue(cl_command_queue q, const KernelHandle& k, size_t gx, size_t gy, si
     }
   }
   if (gx == 0 || (dims >= 2 && gy == 0)) return;  // nothing to do
-  const cl_int err = clEnqueueNDRangeKernel(q, k.get(), dims, nullptr, global,
-                                            use_local ? local : nullptr, 0, nullptr, nullptr);
+  cl_event event = nullptr;
+  const bool profile = kernelProfiling();
+  const cl_int err =
+      clEnqueueNDRangeKernel(q, k.get(), dims, nullptr, global, use_local ? local : nullptr, 0,
+                             nullptr, profile ? &event : nullptr);
   if (err != CL_SUCCESS) check(err, "clEnqueueNDRangeKernel(" + kernelName(k.get()) + ")");
   countLaunch();
+  if (profile && event) recordKernelLaunch(k.get(), event);
 }
 
 }  // namespace emf::cl

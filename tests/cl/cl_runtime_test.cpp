@@ -11,6 +11,7 @@
 #include "cl/device.h"
 #include "cl/embedded_kernels.h"
 #include "cl/image_scale.h"
+#include "cl/kernel_profile.h"
 #include "common/error.h"
 #include "test_support.h"
 
@@ -182,6 +183,32 @@ TEST_F(ClRuntime, ScaleImageMatchesCpuReference) {
     ASSERT_NEAR(out[i], ref[i], kScaleRelTolerance * std::abs(ref[i]) + 1e-7f) << "pixel " << i;
   }
   EXPECT_EQ(nan_count, (n + 96) / 97);
+}
+
+TEST(ClKernelProfile, CountsEachKernelsLaunchesAndTheirDeviceTime) {
+  ClOptions options;
+  setKernelProfiling(true);
+  Context ctx(options);  // created while the profile is on: a profiling queue
+  const int n = 640 * 480;
+  std::vector<float> in(n, 2.0f);
+  MemHandle din = ctx.buffer(CL_MEM_READ_ONLY, n * sizeof(float), in.data());
+  MemHandle dout = ctx.buffer(CL_MEM_WRITE_ONLY, n * sizeof(float));
+  takeKernelProfile();  // whatever earlier tests launched
+  constexpr int kLaunches = 3;
+  for (int i = 0; i < kLaunches; ++i) scaleImage(ctx, din, dout, n, 0.5f, 1.0f);
+  const std::map<std::string, KernelTime> profile = takeKernelProfile();
+  ASSERT_EQ(profile.size(), 1u);
+  ASSERT_EQ(profile.count("scale_image"), 1u);
+  EXPECT_EQ(profile.at("scale_image").launches, kLaunches);
+  // Three passes over 1.2 MB: more than nothing, less than a second on any device.
+  EXPECT_GT(profile.at("scale_image").device_ms, 0.0);
+  EXPECT_LT(profile.at("scale_image").device_ms, 1000.0);
+  // The profile starts again from zero, and launches made with it off are not counted.
+  EXPECT_TRUE(takeKernelProfile().empty());
+  setKernelProfiling(false);
+  scaleImage(ctx, din, dout, n, 0.5f, 1.0f);
+  ctx.finish();
+  EXPECT_TRUE(takeKernelProfile().empty());
 }
 
 TEST_F(ClRuntime, EveryEmbeddedKernelBuilds) {
