@@ -4,7 +4,7 @@
 //   mark_blocks          per pixel (EMF_W per work item): marks every block that the pixel's ray
 //   crosses
 //                        within +-truncation of the measured depth (3-D DDA over blocks; plain
-//                        stores of 1, no atomics).
+//                        stores of 1, no atomics; the flag after the grid's is scratch).
 //   assign_blocks        one work-item per grid block: a marked block without a slot takes one
 //                        from the top of the device free list (one atomic per new block); when
 //                        the free list cannot serve it, the block is counted as dropped and stays
@@ -113,9 +113,12 @@ __kernel void mark_blocks(__global const float* depth, const int width, const in
     alive &= (intW)(n) < max_cells;
     const intW mark = alive & (cx_b >= mark_lo.x) & (cy_b >= mark_lo.y) & (cz_b >= mark_lo.z) &
                       (cx_b < mark_hi.x) & (cy_b < mark_hi.y) & (cz_b < mark_hi.z);
-    const intW lin = cx_b + dims.x * (cy_b + dims.y * cz_b);
-#define EMF_MARK_STORE(l) \
-  if (mark.s##l) needed[lin.s##l] = 1;
+    // Every lane stores, without a branch per lane (the lanes leave their cells at random, and
+    // mispredicted branches cost more than the stores): lanes that mark nothing write the flag
+    // past the grid's (needed holds dims.x * dims.y * dims.z + 1 flags).
+    const intW lin =
+        mark ? cx_b + dims.x * (cy_b + dims.y * cz_b) : (intW)(dims.x * dims.y * dims.z);
+#define EMF_MARK_STORE(l) needed[lin.s##l] = 1;
     EMF_LANES(EMF_MARK_STORE)
 #undef EMF_MARK_STORE
     // Axis of the nearest block face (ties: x before y before z), as in the scalar form.

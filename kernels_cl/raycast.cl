@@ -210,22 +210,30 @@ __kernel void raycast_volume_lanes(
     bx_c = changed ? bx : bx_c;
     by_c = changed ? by : by_c;
     bz_c = changed ? bz : bz_c;
-#define RCW_SLOT(l)                                                                \
-  if (changed.s##l) {                                                              \
-    slot.s##l = emf_block_slot(index, dims, (int4)(bx.s##l, by.s##l, bz.s##l, 0)); \
-  }
+    // emf_block_slot per lane, without a branch per lane (the lanes change blocks at random,
+    // and mispredicted branches cost more than reading the index of every lane): all lanes
+    // read an index entry (entry 0 outside the grid), the changed ones keep it.
+    const intW in_grid =
+        (bx >= 0) & (by >= 0) & (bz >= 0) & (bx < dims.x) & (by < dims.y) & (bz < dims.z);
+    const intW entry = in_grid ? bx + dims.x * (by + dims.y * bz) : 0;
+    intW fetched;
+#define RCW_SLOT(l) fetched.s##l = index[entry.s##l];
     EMF_LANES(RCW_SLOT)
 #undef RCW_SLOT
+    slot = changed ? (in_grid ? fetched : -1) : slot;
     const intW empty = go & (slot < 0);
     const intW in_block = go & (slot >= 0);
-    intW raw = 0;
-    const intW addr = slot * EMF_BLOCK_VOXELS + (vx - bx * EMF_BLOCK) +
-                      EMF_BLOCK * ((vy - by * EMF_BLOCK) + EMF_BLOCK * (vz - bz * EMF_BLOCK));
+    // Every lane reads a voxel word (word 0 where not in a block), without a branch per lane.
+    const intW addr =
+        in_block ? slot * EMF_BLOCK_VOXELS + (vx - bx * EMF_BLOCK) +
+                       EMF_BLOCK * ((vy - by * EMF_BLOCK) + EMF_BLOCK * (vz - bz * EMF_BLOCK))
+                 : 0;
     __global const int* words = (__global const int*)voxels;
-#define RCW_VOXEL(l) \
-  if (in_block.s##l) raw.s##l = words[addr.s##l];
+    intW raw;
+#define RCW_VOXEL(l) raw.s##l = words[addr.s##l];
     EMF_LANES(RCW_VOXEL)
 #undef RCW_VOXEL
+    raw = in_block ? raw : 0;
     const intW observed = in_block & (EMF_WORD_WEIGHT(raw) > 0);
     const intW unobserved = in_block & !observed;
     const floatW psi = convert_floatW(EMF_WORD_TSDF(raw)) * psi_scale;

@@ -137,8 +137,9 @@ void Volume::createBuffers() {
                                      sizeof(minus_one), 0, n * sizeof(int32_t), 0, nullptr,
                                      nullptr));
   }
-  needed_ = ctx_.buffer(CL_MEM_READ_WRITE, n);
-  EMF_CL_CHECK(clEnqueueFillBuffer(ctx_.queue(), needed_.get(), &zero, sizeof(zero), 0, n, 0,
+  // One flag per block, and one more that mark_blocks writes for the lanes it does not mark.
+  needed_ = ctx_.buffer(CL_MEM_READ_WRITE, n + 1);
+  EMF_CL_CHECK(clEnqueueFillBuffer(ctx_.queue(), needed_.get(), &zero, sizeof(zero), 0, n + 1, 0,
                                    nullptr, nullptr));
   block_list_ = ctx_.buffer(CL_MEM_READ_WRITE, n * sizeof(int32_t));
   ctx_.finish();
@@ -146,7 +147,7 @@ void Volume::createBuffers() {
 
 size_t Volume::indexBytes() const {
   const size_t n = static_cast<size_t>(spec_.blockCount());
-  return n * (sizeof(int32_t) * (spec_.has_counts ? 3 : 2) + 1) + kVolumeStateInts * 4;
+  return n * (sizeof(int32_t) * (spec_.has_counts ? 3 : 2) + 1) + 1 + kVolumeStateInts * 4;
 }
 
 cl_int4 Volume::dimsBlocks() const {
