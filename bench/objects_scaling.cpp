@@ -9,10 +9,11 @@
 // frame. Last, the marginal cost of one more object (least-squares slope over the counts that
 // were reached). --kernels adds, per count, the device time and launches per measured frame of
 // each kernel (OpenCL profiling events, cl/kernel_profile.h): where the time goes on the device
-// the bench runs on, a GPU included.
+// the bench runs on, a GPU included. --set S.K=V (repeatable) changes a default for every run
+// (e.g. cl.lanes=8).
 //
 //   objects_scaling [--frames N] [--seed S] [--sizes 320,640] [--counts 0,1,2,4,7]
-//                   [--warmup F] [--kernels]
+//                   [--warmup F] [--kernels] [--set S.K=V]..
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -107,11 +108,12 @@ void printKernels(const std::vector<Row>& rows) {
 
 constexpr const char* kUsage =
     "usage: objects_scaling [--frames N] [--seed S] [--sizes 320,640] [--counts 0,1,2,4,7] "
-    "[--warmup F] [--kernels]\n";
+    "[--warmup F] [--kernels] [--set S.K=V]..\n";
 
 int main(int argc, char** argv) {
   long frames = 120, seed = 4, warmup = 40;
   bool kernels = false;
+  std::vector<std::string> sets;  // section.key=value overrides of the defaults
   std::vector<long> sizes = {320, 640}, counts = {0, 1, 2, 4, 7};
   try {
     emf::bench::ArgWalker args(argc, argv);
@@ -131,6 +133,8 @@ int main(int argc, char** argv) {
         counts = parseList("--counts", args.value(), 0, 8);
       } else if (args.is("--kernels")) {
         kernels = true;
+      } else if (args.is("--set")) {
+        sets.push_back(args.value());
       } else {
         args.unknown();
       }
@@ -142,6 +146,8 @@ int main(int argc, char** argv) {
   }
   try {
     emf::Config base;
+    for (const std::string& assignment : sets) base.set(assignment);
+    base.validate();
     emf::cl::setKernelProfiling(kernels);  // before the Context: its queue takes the property
     emf::cl::Context ctx(base.cl);
     for (const long width : sizes) {
