@@ -43,6 +43,11 @@ struct ObjectOptions {
       "oven",          "sink",         "refrigerator"};
   bool track_person = false;
   double match_iou = 0.2;
+  /// A detection IoU matching left that holds at least this share of the ray-cast mask of an
+  /// object of its class that no detection matched is a mask spilled over that object
+  /// (em::matchSpilledMasks): the object counts as detected and no new object is made from it.
+  /// 0 = off (the paper); docs/deviations.md.
+  double match_spilled = 0.7;
   /// In the ray-cast object masks (matching, foreground counts, creation check, overlays) an
   /// object's surface stays in front of the background's copy of it unless it lies more than
   /// this much deeper, m (the authors' code: 5 cm).
@@ -156,6 +161,9 @@ struct ObjectOptions {
     b.textList("exclude_classes", exclude_classes, "classes that never create objects");
     b.boolean("track_person", track_person, "track people as objects that are never rendered");
     b.real("match_iou", match_iou, 0.0, 1.0, "", "min mask IoU to match a detection");
+    b.real("match_spilled", match_spilled, 0.0, 1.0, "",
+           "an unmatched detection holding this share of the mask of an unmatched object of its "
+           "class is a mask spilled over it (0 = off, the paper)");
     b.real("render_margin_m", render_margin_m, 0.0, 1.0, "m",
            "in the ray-cast object masks an object stays in front of the background unless it "
            "lies more than this deeper");

@@ -54,6 +54,53 @@ std::vector<int> matchByIoU(const std::vector<std::vector<double>>& iou, double 
   return match;
 }
 
+std::vector<int> matchSpilledMasks(const std::vector<cv::Mat>& detections,
+                                   const std::vector<std::string>& detection_classes,
+                                   const std::vector<int>& match,
+                                   const std::vector<MaskObject>& objects, const cv::Mat& ids,
+                                   const cv::Mat& depth, const cv::Mat& measured_depth,
+                                   double share, double margin_m, double margin_per_m2) {
+  CV_Assert(detections.size() == detection_classes.size() && detections.size() == match.size());
+  std::vector<int> spilled(detections.size(), -1);
+  if (share <= 0.0 || objects.empty()) return spilled;
+  CV_Assert(ids.type() == CV_32S && depth.type() == CV_32F && measured_depth.type() == CV_32F &&
+            ids.size() == depth.size() && ids.size() == measured_depth.size());
+  for (size_t k = 0; k < objects.size(); ++k) {
+    if (std::find(match.begin(), match.end(), static_cast<int>(k)) != match.end()) continue;
+    const cv::Mat mine = ids == objects[k].id;
+    const int pixels = cv::countNonZero(mine);
+    if (pixels == 0) continue;
+    // Its pixels where the frame's depth shows nothing in front of its ray-cast surface.
+    cv::Mat shown = mine.clone();
+    for (int v = 0; v < shown.rows; ++v) {
+      uint8_t* s = shown.ptr<uint8_t>(v);
+      const float* r = depth.ptr<float>(v);
+      const float* m = measured_depth.ptr<float>(v);
+      for (int u = 0; u < shown.cols; ++u) {
+        if (s[u] == 0 || !std::isfinite(r[u]) || !std::isfinite(m[u]) || !(m[u] > 0.0f)) continue;
+        const double z = r[u];
+        if (m[u] < z - (margin_m + margin_per_m2 * z * z)) s[u] = 0;
+      }
+    }
+    int best = -1;
+    double best_share = share;
+    for (size_t i = 0; i < detections.size(); ++i) {
+      if (match[i] >= 0 || spilled[i] >= 0 || detection_classes[i] != objects[k].class_name) {
+        continue;
+      }
+      CV_Assert(detections[i].size() == ids.size());
+      const double held =
+          static_cast<double>(cv::countNonZero(shown & (detections[i] != 0))) / pixels;
+      if (held >= best_share) {
+        best_share = held;
+        best = static_cast<int>(i);
+      }
+    }
+    if (best >= 0) spilled[static_cast<size_t>(best)] = static_cast<int>(k);
+  }
+  return spilled;
+}
+
 namespace {
 double percentile(std::vector<double> v, double p) {
   // Linear interpolation between closest ranks (numpy's default).

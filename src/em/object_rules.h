@@ -34,6 +34,31 @@ double maskIoU(const cv::Mat& a, const cv::Mat& b);
 /// take the largest remaining IoU >= threshold. Returns, per detection, the column or -1.
 std::vector<int> matchByIoU(const std::vector<std::vector<double>>& iou, double threshold);
 
+/// An object as the spilled-mask rule sees it: its id in the ray-cast ids and its class.
+struct MaskObject {
+  int id = 0;
+  std::string class_name;
+};
+
+/// Masks spilled over objects (objects.match_spilled = `share`, beyond the paper). A detector's
+/// mask that spills over an object onto what surrounds it overlaps the object's ray-cast mask
+/// with a low IoU only because it is large; left unmatched, it would make a second object of the
+/// first. Among the detections matchByIoU left (match[i] < 0), one of an object's class holding
+/// at least `share` of that object's pixels in `ids` is taken as a spilled mask of it, when no
+/// detection matched the object. A pixel counts as held where the detection covers it and the
+/// measured depth is not nearer than `depth` (the ray cast) by more than margin_m +
+/// margin_per_m2 z^2: a new object of the class in front of an old one is no spill over it.
+/// Each object takes the detection holding the largest share of it, one to one, objects in
+/// order. `detections`: binary masks (non-zero = inside); `ids` CV_32S, `depth` and
+/// `measured_depth` CV_32F (NaN = none), all of one size. Returns, per detection, the index of
+/// its object in `objects` or -1 (share = 0: all -1).
+std::vector<int> matchSpilledMasks(const std::vector<cv::Mat>& detections,
+                                   const std::vector<std::string>& detection_classes,
+                                   const std::vector<int>& match,
+                                   const std::vector<MaskObject>& objects, const cv::Mat& ids,
+                                   const cv::Mat& depth, const cv::Mat& measured_depth,
+                                   double share, double margin_m, double margin_per_m2);
+
 /// Existence counts of an object (step 5): Ex counts matched detection frames, NonEx unmatched.
 struct Existence {
   double ex = 1.0;  // the creating detection counts once

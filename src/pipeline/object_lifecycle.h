@@ -77,7 +77,8 @@ struct ConfirmedObject {
 /// How one detection of a frame was matched to the objects' ray-cast masks.
 struct DetectionMatch {
   std::string class_name;
-  int object_id = -1;    // the object it was matched to, -1 none (a candidate for a new object)
+  int object_id =
+      -1;  // the object it was matched to (by IoU or as a mask spilled over it), -1 none
   int best_object = -1;  // the object whose mask overlaps it most, -1 none
   double best_iou = 0;   // that overlap (IoU with the object's mask)
 };
@@ -289,7 +290,8 @@ class ObjectLifecycle {
   bool new_objects_only_ = false;           // they come from a detector of new things only (motion)
   std::vector<ObjectOutcome> deleted_now_;  // objects deleted in this frame
   std::vector<ConfirmedObject> confirmed_now_;  // objects confirmed in this frame
-  cv::Mat last_ids_;  // object ids ray-cast for the last detection matching (frame size)
+  cv::Mat last_ids_;    // object ids ray-cast for the last detection matching (frame size)
+  cv::Mat last_depth_;  // ... and the depth of that ray cast (camera z, m; NaN = none)
   // The images of each object's visibility cast (kept to reuse their buffers): depth, ids,
   // hidden pixels, the frame's depth at that size, and the leaving test's ids.
   cv::Mat visibility_depth_, visibility_ids_, hidden_mask_, visibility_measured_, wide_ids_;

@@ -40,7 +40,36 @@ int ObjectLifecycle::matchDetections(const DetectionBatch& batch,
   renderObjectIds(batch, &vertex);
   const std::vector<int> match = matchByMasks(usable, matches);
   std::vector<bool> matched(objects_.size(), false);
+  // A mask spilled over an object that no detection matched shows that object (not for a late
+  // result: the frame's depth is not the one its mask was cut from). Nothing else is taken from
+  // it: its pixels around the object would count as the object's.
+  std::vector<int> spilled(usable.size(), -1);
+  if (config_.objects.match_spilled > 0.0 && batch.frames_late == 0 && !objects_.empty()) {
+    if (vertex.empty()) vertex = downloadVertexMap();
+    std::vector<cv::Mat> masks;
+    std::vector<std::string> classes;
+    for (const core::Detection* d : usable) {
+      masks.push_back(binaryMask(d->mask));
+      classes.push_back(d->class_name);
+    }
+    std::vector<em::MaskObject> shown;
+    for (const auto& o : objects_) shown.push_back({o.id, o.class_name});
+    spilled =
+        em::matchSpilledMasks(masks, classes, match, shown, last_ids_, last_depth_,
+                              measuredDepth(vertex), config_.objects.match_spilled,
+                              config_.objects.render_margin_m, config_.track.inlier_noise_per_m2);
+  }
   for (size_t i = 0; i < usable.size(); ++i) {
+    if (spilled[i] >= 0) {
+      TrackedObject& o = objects_[static_cast<size_t>(spilled[i])];
+      matched[static_cast<size_t>(spilled[i])] = true;
+      (*matches)[matches->size() - usable.size() + i].object_id = o.id;
+      logDebug("frame ", frames_, ": detection '", usable[i]->class_name, "' spills over object ",
+               o.id, " (objects.match_spilled ", config_.objects.match_spilled, ")");
+      o.existence.ex += 1.0;
+      confirmIfDue(o);
+      continue;
+    }
     if (match[i] < 0) {
       unmatched_.push_back(*usable[i]);
       continue;
@@ -110,8 +139,8 @@ void ObjectLifecycle::renderObjectIds(const DetectionBatch& batch, cv::Mat* vert
     raycaster_.download(&object_depth, nullptr, &object_ids);
   }
   raycaster_.render(items, intrinsics_, batch.T_world_camera);
-  cv::Mat depth;
-  raycaster_.download(measured ? &depth : nullptr, nullptr, &last_ids_);
+  cv::Mat& depth = last_depth_;
+  raycaster_.download(&depth, nullptr, &last_ids_);
   if (!object_ids.empty()) {
     if (vertex->empty()) *vertex = downloadVertexMap();
     const int uncovered = em::uncoverStaleBackground(&last_ids_, depth, object_ids, object_depth,

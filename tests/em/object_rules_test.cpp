@@ -64,6 +64,83 @@ TEST(ObjectRules, GreedyMatchingTakesLargestIoUAboveThreshold) {
   EXPECT_TRUE(matchByIoU({}, 0.2).empty());
 }
 
+// A 40 x 30 image: object 3 (a "horse", 10 x 10 px at 2 m) and object 5 (a "cup", 4 x 4 px at
+// 1.5 m) on the background (id 0) at 3 m; the frame's depth equals the ray cast.
+struct SpillScene {
+  cv::Mat ids = cv::Mat(30, 40, CV_32S, cv::Scalar(0));
+  cv::Mat depth = cv::Mat(30, 40, CV_32F, cv::Scalar(3.0f));
+  cv::Mat measured;
+  std::vector<MaskObject> objects = {{3, "horse"}, {5, "cup"}};
+  SpillScene() {
+    ids(cv::Rect(5, 5, 10, 10)).setTo(3);
+    depth(cv::Rect(5, 5, 10, 10)).setTo(2.0f);
+    ids(cv::Rect(30, 20, 4, 4)).setTo(5);
+    depth(cv::Rect(30, 20, 4, 4)).setTo(1.5f);
+    measured = depth.clone();
+  }
+  static cv::Mat mask(cv::Rect r) {
+    cv::Mat m(30, 40, CV_8U, cv::Scalar(0));
+    m(r).setTo(255);
+    return m;
+  }
+};
+
+constexpr double kMarginM = 0.05;        // objects.render_margin_m
+constexpr double kMarginPerM2 = 0.0025;  // track.inlier_noise_per_m2
+
+TEST(ObjectRules, AMaskSpilledOverAnUnmatchedObjectOfItsClassShowsThatObject) {
+  SpillScene s;
+  // The horse's mask spilled over 25 x 20 px (IoU 100 / 500 = 0.2 - below a 0.3 match), and
+  // a cup detection that covers the horse too: only the horse's class takes it.
+  const std::vector<cv::Mat> masks = {SpillScene::mask(cv::Rect(0, 0, 25, 20)),
+                                      SpillScene::mask(cv::Rect(0, 0, 25, 20))};
+  const std::vector<std::string> classes = {"cup", "horse"};
+  const std::vector<int> spilled = matchSpilledMasks(
+      masks, classes, {-1, -1}, s.objects, s.ids, s.depth, s.measured, 0.7, kMarginM, kMarginPerM2);
+  EXPECT_EQ(spilled, (std::vector<int>{-1, 0}));
+  // Off (share 0), or the horse already matched by IoU: nothing spilled.
+  EXPECT_EQ(matchSpilledMasks(masks, classes, {-1, -1}, s.objects, s.ids, s.depth, s.measured, 0.0,
+                              kMarginM, kMarginPerM2),
+            (std::vector<int>{-1, -1}));
+  EXPECT_EQ(matchSpilledMasks(masks, classes, {-1, 0}, s.objects, s.ids, s.depth, s.measured, 0.7,
+                              kMarginM, kMarginPerM2),
+            (std::vector<int>{-1, -1}));
+}
+
+TEST(ObjectRules, ASpilledMaskMustHoldTheShareOfTheObjectThatTheDepthShows) {
+  SpillScene s;
+  // 60 of the horse's 100 px (rows 5-10) are held: below 0.7, above 0.5.
+  const std::vector<cv::Mat> half = {SpillScene::mask(cv::Rect(0, 0, 25, 11))};
+  EXPECT_EQ(matchSpilledMasks(half, {"horse"}, {-1}, s.objects, s.ids, s.depth, s.measured, 0.7,
+                              kMarginM, kMarginPerM2),
+            (std::vector<int>{-1}));
+  EXPECT_EQ(matchSpilledMasks(half, {"horse"}, {-1}, s.objects, s.ids, s.depth, s.measured, 0.5,
+                              kMarginM, kMarginPerM2),
+            (std::vector<int>{0}));
+  // Two horse detections hold the whole horse and 60 % of it: the first takes it.
+  const std::vector<cv::Mat> two = {SpillScene::mask(cv::Rect(0, 0, 25, 11)),
+                                    SpillScene::mask(cv::Rect(0, 0, 25, 20))};
+  EXPECT_EQ(matchSpilledMasks(two, {"horse", "horse"}, {-1, -1}, s.objects, s.ids, s.depth,
+                              s.measured, 0.5, kMarginM, kMarginPerM2),
+            (std::vector<int>{-1, 0}));
+}
+
+TEST(ObjectRules, ANewObjectInFrontOfAnOldOneOfItsClassIsNoSpillOverIt) {
+  SpillScene s;
+  // A second horse stands 0.5 m in front of the first and covers all of it: the frame's depth
+  // there is 1.5 m, nearer than the ray cast (2 m) by more than the margin (0.06 m at 2 m).
+  s.measured(cv::Rect(3, 3, 14, 14)).setTo(1.5f);
+  const std::vector<cv::Mat> masks = {SpillScene::mask(cv::Rect(3, 3, 14, 14))};
+  EXPECT_EQ(matchSpilledMasks(masks, {"horse"}, {-1}, s.objects, s.ids, s.depth, s.measured, 0.7,
+                              kMarginM, kMarginPerM2),
+            (std::vector<int>{-1}));
+  // Within the margin (depth noise), the horse is still the one shown.
+  s.measured(cv::Rect(3, 3, 14, 14)).setTo(1.95f);
+  EXPECT_EQ(matchSpilledMasks(masks, {"horse"}, {-1}, s.objects, s.ids, s.depth, s.measured, 0.7,
+                              kMarginM, kMarginPerM2),
+            (std::vector<int>{0}));
+}
+
 TEST(ObjectRules, ExistenceProbabilityAndDeletion) {
   ObjectOptions o;  // delete below 0.1
   Existence e;      // created by one detection
