@@ -45,7 +45,8 @@ struct ObjectOptions {
   double match_iou = 0.2;
   /// A detection IoU matching left that holds at least this share of the ray-cast mask of an
   /// object of its class that no detection matched is a mask spilled over that object
-  /// (em::matchSpilledMasks): the object counts as detected and no new object is made from it.
+  /// (em::matchSpilledMasks): the object counts as detected, takes foreground counts on its own
+  /// ray-cast pixels only, and no new object is made from it.
   /// 0 = off (the paper); docs/deviations.md.
   double match_spilled = 0.7;
   /// In the ray-cast object masks (matching, foreground counts, creation check, overlays) an

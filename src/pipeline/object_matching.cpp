@@ -41,8 +41,9 @@ int ObjectLifecycle::matchDetections(const DetectionBatch& batch,
   const std::vector<int> match = matchByMasks(usable, matches);
   std::vector<bool> matched(objects_.size(), false);
   // A mask spilled over an object that no detection matched shows that object (not for a late
-  // result: the frame's depth is not the one its mask was cut from). Nothing else is taken from
-  // it: its pixels around the object would count as the object's.
+  // result: the frame's depth is not the one its mask was cut from). It gives foreground counts
+  // on the object's own ray-cast pixels only, and no growth or claim region: its pixels around
+  // the object would count as the object's.
   std::vector<int> spilled(usable.size(), -1);
   if (config_.objects.match_spilled > 0.0 && batch.frames_late == 0 && !objects_.empty()) {
     if (vertex.empty()) vertex = downloadVertexMap();
@@ -68,6 +69,10 @@ int ObjectLifecycle::matchDetections(const DetectionBatch& batch,
                o.id, " (objects.match_spilled ", config_.objects.match_spilled, ")");
       o.existence.ex += 1.0;
       confirmIfDue(o);
+      // Foreground counts only where the mask covers the object's own ray-cast pixels.
+      cv::Mat fg = usable[i]->mask.clone();
+      fg.setTo(NAN, last_ids_ != o.id);
+      pending_fg_[o.id] = fg;
       continue;
     }
     if (match[i] < 0) {
