@@ -42,6 +42,18 @@ inline synth::Scene boxRoomScene(const std::string& name, int box_id, double box
   return s;
 }
 
+/// The box room seen from 1 m up and 1.6 m in front of the box (at (0, 0.6) on the floor), the
+/// camera swaying 8 cm sideways: the box stands in the middle of the image, floor and wall
+/// around it.
+inline synth::Scene standingBoxScene(const std::string& name, int box_id, int frames) {
+  synth::Scene s = boxRoomScene(name, box_id, 0.0, 0.6);
+  s.camera.path.origin_m = Eigen::Vector3d(0, -1.0, 1.0);
+  s.camera.path.position_terms.push_back({Eigen::Vector3d(0.08, 0, 0.03), 0.3, 0.0});
+  s.camera.target.origin_m = Eigen::Vector3d(0, 0.6, 0.2);
+  s.default_frames = frames;
+  return s;
+}
+
 /// Object `id`'s exact silhouette in a synthetic frame as a detection of class "box".
 inline core::Detection exactDetection(const core::Frame& f, int id) {
   core::Detection det;

@@ -29,15 +29,6 @@ constexpr int kSpillPx = 20;  // the spilled masks reach this far above the box,
 constexpr double kGrownSideM = 2.0;
 constexpr double kMaxBlocksShare = 0.6;
 
-synth::Scene standingBoxScene() {
-  synth::Scene s = test_scene::boxRoomScene("standing-box", kBoxId, 0.0, 0.6);
-  s.camera.path.origin_m = Eigen::Vector3d(0, -1.0, 1.0);
-  s.camera.path.position_terms.push_back({Eigen::Vector3d(0.08, 0, 0.03), 0.3, 0.0});
-  s.camera.target.origin_m = Eigen::Vector3d(0, 0.6, 0.2);
-  s.default_frames = kFrames;
-  return s;
-}
-
 struct GrowthRun {
   double side_m = 0;  // the box volume's largest side after the last detection
   int blocks = 0;     // its allocated blocks then
@@ -52,7 +43,7 @@ GrowthRun runScene(bool claim_region) {
   synth::SynthOptions so;
   so.width = kWidth;
   so.height = kHeight;
-  synth::SynthSource src(so, standingBoxScene());
+  synth::SynthSource src(so, test_scene::standingBoxScene("standing-box", kBoxId, kFrames));
   SlamSystem slam(ctx, config, src.intrinsics());
   GrowthRun run;
   core::Frame f;

@@ -22,15 +22,6 @@ constexpr int kFrames = 41;
 constexpr int kBoxId = 1;
 constexpr int kDetectEvery = 10;
 
-synth::Scene standingBoxScene() {
-  synth::Scene s = test_scene::boxRoomScene("spilled-box", kBoxId, 0.0, 0.6);
-  s.camera.path.origin_m = Eigen::Vector3d(0, -1.0, 1.0);
-  s.camera.path.position_terms.push_back({Eigen::Vector3d(0.08, 0, 0.03), 0.3, 0.0});
-  s.camera.target.origin_m = Eigen::Vector3d(0, 0.6, 0.2);
-  s.default_frames = kFrames;
-  return s;
-}
-
 /// The box's silhouette, or on later frames its bounding box grown by its own size on every
 /// side (clipped to the image) as a spilled mask.
 core::Detection boxDetection(const core::Frame& f) {
@@ -59,7 +50,7 @@ SpillRun runScene(double match_spilled) {
   synth::SynthOptions so;
   so.width = kWidth;
   so.height = kHeight;
-  synth::SynthSource src(so, standingBoxScene());
+  synth::SynthSource src(so, test_scene::standingBoxScene("spilled-box", kBoxId, kFrames));
   SlamSystem slam(ctx, config, src.intrinsics());
   SpillRun run;
   core::Frame f;
