@@ -77,8 +77,8 @@ struct ConfirmedObject {
 /// How one detection of a frame was matched to the objects' ray-cast masks.
 struct DetectionMatch {
   std::string class_name;
-  int object_id =
-      -1;  // the object it was matched to (by IoU or as a mask spilled over it), -1 none
+  /// The object it was matched to (by IoU, or as a mask spilled over it), -1 none.
+  int object_id = -1;
   int best_object = -1;  // the object whose mask overlaps it most, -1 none
   double best_iou = 0;   // that overlap (IoU with the object's mask)
 };
