@@ -81,6 +81,11 @@ struct ObjectOptions {
   /// An object whose tracking failed on more frames in a row than this (camera tracked) is
   /// retired: its pose is stale. 0 = never (the paper has no such rule).
   int max_lost_frames = 15;
+  /// TSDF weight cap W_max of object volumes (the paper: 64, map.max_weight for every volume).
+  /// A model fused at its own tracked poses follows their errors over about W_max frames; a
+  /// rigid object's model can remember longer than the background, which must forget what
+  /// moved out of it. docs/deviations.md.
+  double max_weight = 127.0;
   /// An object with this fraction of its own ray cast behind nearer measured surfaces is
   /// hidden: held still in the world, not tracked or integrated, not retired as lost. 0 = off
   /// (the paper, which deletes it as invisible); docs/method.md#hidden-and-leaving-objects.
@@ -202,6 +207,9 @@ struct ObjectOptions {
            "objects whose mean association over their mask is below this are deleted");
     b.integer("max_lost_frames", max_lost_frames, 0, 100000, "frames",
               "objects whose tracking failed on more frames in a row are deleted (0 = never)");
+    b.real("max_weight", max_weight, 1.0, 127.0, "",
+           "TSDF weight cap W_max of object volumes (storage limit 127; the paper: 64, as "
+           "map.max_weight)");
     b.real("hidden_fraction", hidden_fraction, 0.0, 1.0, "",
            "an object with this fraction of its ray cast behind nearer surfaces is hidden: held "
            "still, not tracked, not deleted as lost or invisible (0 = off, the paper)");

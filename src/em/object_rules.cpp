@@ -313,6 +313,7 @@ map::VolumeSpec objectVolumeSpec(const map::MapOptions& map_options, const Objec
                                                  static_cast<float>(placement.voxel_size_m));
   spec.free_space_full_weight = options.free_space_full_weight;
   spec.behind_dropoff = options.behind_dropoff;
+  spec.max_weight = static_cast<float>(options.max_weight);
   spec.truncation_m = static_cast<float>(objectTruncation(
       options, map_options.truncation_voxels, placement.voxel_size_m, pixel_footprint_m));
   return spec;

@@ -14,7 +14,7 @@ struct MapOptions {
   int background_resolution = 512;
   /// Truncation distance in voxels (docs/method.md#integration).
   double truncation_voxels = 10.0;
-  /// Weight cap W_max.
+  /// Weight cap W_max of the background (objects: objects.max_weight).
   double max_weight = 64.0;
   /// Integrate free-space voxels with weight 1 whatever the association (authors' code).
   bool free_space_full_weight = true;
@@ -47,7 +47,9 @@ struct MapOptions {
     b.integer("background_resolution", background_resolution, 8, 4096, "voxels",
               "background extent per axis");
     b.real("truncation_voxels", truncation_voxels, 1.0, 100.0, "voxels", "TSDF truncation");
-    b.real("max_weight", max_weight, 1.0, 127.0, "", "TSDF weight cap W_max (storage limit 127)");
+    b.real("max_weight", max_weight, 1.0, 127.0, "",
+           "TSDF weight cap W_max of the background (storage limit 127; objects: "
+           "objects.max_weight)");
     b.boolean("free_space_full_weight", free_space_full_weight,
               "integrate free space with weight 1 regardless of association");
     b.real("initial_camera_face_offset", initial_camera_face_offset, 0.0, 0.5, "extent",

@@ -36,6 +36,7 @@ VolumeSpec VolumeSpec::background(const MapOptions& options) {
   s.voxel_size_m = static_cast<float>(options.background_voxel_m);
   s.truncation_m = static_cast<float>(options.truncation_voxels * options.background_voxel_m);
   s.free_space_full_weight = options.free_space_full_weight;
+  s.max_weight = static_cast<float>(options.max_weight);
   return s;
 }
 
@@ -49,6 +50,7 @@ VolumeSpec VolumeSpec::object(const MapOptions& options, int resolution_voxels,
   s.has_counts = true;
   s.integrate_all_blocks = true;
   s.free_space_full_weight = options.free_space_full_weight;
+  s.max_weight = static_cast<float>(options.max_weight);
   return s;
 }
 
@@ -229,7 +231,6 @@ void Volume::integrate(const IntegrationInput& frame) {
   if (last_report_.listed_blocks == 0) return;
   const PoseRows T_camera_volume = PoseRows::from(frame.T_world_camera.inverse() * T_world_volume_);
   const core::Intrinsics& k = frame.intrinsics;
-  const MapOptions& o = pool_.options();
   const size_t blocks = static_cast<size_t>(last_report_.listed_blocks);
   cl::setArgs(
       integrate_, block_list_, index_, dimsBlocks(), pool_.voxels(), *frame.depth,
@@ -238,7 +239,7 @@ void Volume::integrate(const IntegrationInput& frame) {
       static_cast<cl_float>(k.fy), static_cast<cl_float>(k.cx), static_cast<cl_float>(k.cy),
       row4(T_camera_volume, 0), row4(T_camera_volume, 1), row4(T_camera_volume, 2),
       static_cast<cl_float>(spec_.voxel_size_m), static_cast<cl_float>(spec_.truncation_m),
-      static_cast<cl_float>(1.0f / spec_.truncation_m), static_cast<cl_float>(o.max_weight),
+      static_cast<cl_float>(1.0f / spec_.truncation_m), static_cast<cl_float>(spec_.max_weight),
       static_cast<cl_int>(spec_.free_space_full_weight), static_cast<cl_int>(spec_.behind_dropoff));
   // ctx_.lanes() voxels per work item.
   const size_t items = static_cast<size_t>(kBlockVoxels / ctx_.lanes());

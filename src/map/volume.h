@@ -45,6 +45,9 @@ struct VolumeSpec {
   /// Observations behind the surface (d < -voxel) count with a weight that falls linearly to 0
   /// at -truncation (Voxblox's drop-off; off in the paper). Objects: objects.behind_dropoff.
   bool behind_dropoff = false;
+  /// TSDF weight cap W_max (docs/method.md#integration): map.max_weight for the background,
+  /// objects.max_weight for objects.
+  float max_weight = 64.0f;
 
   /// The background of docs/method.md#background-volume from map.background_voxel_m /
   /// background_resolution (rounded up to whole blocks) / truncation_voxels.

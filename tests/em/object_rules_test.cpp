@@ -343,11 +343,16 @@ TEST(ObjectRules, ObjectVolumeSpecCarriesTheObjectsIntegrationRules) {
   EXPECT_TRUE(a.has_counts);
   EXPECT_FALSE(a.free_space_full_weight);
   EXPECT_FALSE(a.behind_dropoff);
+  // The objects' weight cap, not the background's.
+  EXPECT_FLOAT_EQ(a.max_weight, 127.0f);
+  EXPECT_FLOAT_EQ(map::VolumeSpec::background(m).max_weight, 64.0f);
   o.free_space_full_weight = true;
   o.behind_dropoff = true;
+  o.max_weight = 20.0;
   const map::VolumeSpec b = objectVolumeSpec(m, o, p, 2.3 / 262.5);
   EXPECT_TRUE(b.free_space_full_weight);
   EXPECT_TRUE(b.behind_dropoff);
+  EXPECT_FLOAT_EQ(b.max_weight, 20.0f);
 }
 
 TEST(ObjectRules, CreationChecks) {

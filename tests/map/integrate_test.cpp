@@ -303,6 +303,35 @@ TEST_F(Integration, WeightCapAndRunningAverage) {
   EXPECT_GT(capped, 10000);
 }
 
+TEST_F(Integration, AVolumesOwnWeightCapOverridesTheMaps) {
+  // An object volume capped at 3 in a pool whose map.max_weight is 5 (objects.max_weight).
+  map::MapOptions o = smallOptions();
+  o.max_weight = 5;
+  map::VoxelPool pool(ctx(), o);
+  const Scene scene;
+  map::VolumeSpec spec = map::VolumeSpec::object(o, 48, 0.02f);
+  spec.max_weight = 3;
+  Eigen::Isometry3d T_wv = Eigen::Isometry3d::Identity();
+  T_wv.translation() = scene.spheres[1].centre_w - Eigen::Vector3d::Constant(0.48);
+  map::Volume vol(pool, spec, T_wv);
+  const core::Intrinsics k = testIntrinsics(160, 120);
+  const Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  Frame f = makeFrame(renderDepth(scene, k, T), k, T);
+  map::VolumeHostData h;
+  // fuseAndCompare checks every voxel against the reference at the volume's own cap.
+  for (int i = 0; i < 5; ++i) ASSERT_EQ(fuseAndCompare(vol, f, &h, i == 0), 0) << "frame " << i;
+  int capped = 0;
+  for (const int32_t slot : h.index) {  // TSDF blocks (the count blocks hold (Fg, Bg))
+    if (slot < 0) continue;
+    for (int i = 0; i < map::kBlockVoxels; ++i) {
+      const map::Voxel& v = h.voxels[static_cast<size_t>(slot) * map::kBlockVoxels + i];
+      ASSERT_LE(v.weight_q, 3 * 256);
+      capped += v.weight_q == 3 * 256;
+    }
+  }
+  EXPECT_GT(capped, 1000);
+}
+
 TEST_F(Integration, ForegroundCountsFromDetectionMaskMatchReference) {
   const map::MapOptions o = smallOptions();
   map::VoxelPool pool(ctx(), o);

@@ -102,8 +102,7 @@ class MapTest : public WithClQueue {
     const map::PoseRows T_cv =
         map::PoseRows::from(f.input.T_world_camera.inverse() * vol.T_world_volume());
     map::integrateReference(ref, list, f.depth_host, f.weights_host, f.mask_host,
-                            cameraF(f.input.intrinsics), T_cv,
-                            static_cast<float>(vol.pool().options().max_weight),
+                            cameraF(f.input.intrinsics), T_cv, vol.spec().max_weight,
                             vol.spec().free_space_full_weight, vol.spec().behind_dropoff);
     EXPECT_EQ(dev.index, ref.index);
     EXPECT_EQ(dev.count_index, ref.count_index);
