@@ -73,7 +73,7 @@ struct ObjectOptions {
   int visibility_border_px = 20;
   /// The visibility rule ray-casts the objects at most this wide, px (its pixel thresholds
   /// scale with it). 0 = the frame's size (the paper); a speed deviation, docs/deviations.md.
-  int visibility_width = 320;
+  int visibility_width = 160;
   /// An object with fewer than invisible_min_px pixels inside the border stays visible when
   /// this fraction of what it renders lies inside the border (small, not leaving). 0 = off.
   double invisible_inside_fraction = 0.9;

@@ -28,8 +28,10 @@ constexpr int kObjectId = 1;
 // frames late over seeds 1-6 (as the box leaves, the sliver left in view lets its tracking
 // slide along the border, up to 15 cm on its last frames, and the model lingers).
 constexpr int kGroundTruthFrameTolerance = 3;
-// The reduced cast against the full-size one: its pixels are 4 of the frame's (measured: the
-// same frame on seeds 1-6).
+// The reduced casts against the full-size one: a pixel of the cast at half the frame's width
+// covers 4 of the frame's (the default objects.visibility_width at 320x240), at a quarter 16
+// (the default at 640x480). Measured: the same frame at half width on seeds 1-6, and at both
+// widths on this scene's seed.
 constexpr int kReducedFrameTolerance = 1;
 
 synth::Scene leavingBoxScene() {
@@ -106,15 +108,19 @@ TEST(SlamVisibility, ALeavingObjectIsDeletedWhenItsSilhouetteIsTooSmall) {
   ASSERT_GT(first_px, 4 * opt.invisible_min_px) << "the scene must start with the box well seen";
   ASSERT_GT(gt_frame, 20) << "the box must stay in view long enough to be tracked";
 
-  int lost_full = 0, lost_reduced = 0;
+  int lost_full = 0, lost_reduced = 0, lost_quarter = 0;
   const Deletion full = runScene(0, &lost_full);
   const Deletion reduced = runScene(kWidth / 2, &lost_reduced);
-  std::printf("deleted on frame %lld (full-size cast: %s), %lld (%dx%d cast: %s)\n",
-              static_cast<long long>(full.frame), full.reason.c_str(),
-              static_cast<long long>(reduced.frame), kWidth / 2, kHeight / 2,
-              reduced.reason.c_str());
+  const Deletion quarter = runScene(kWidth / 4, &lost_quarter);
+  std::printf(
+      "deleted on frame %lld (full-size cast: %s), %lld (%dx%d cast: %s), %lld (%dx%d "
+      "cast: %s)\n",
+      static_cast<long long>(full.frame), full.reason.c_str(),
+      static_cast<long long>(reduced.frame), kWidth / 2, kHeight / 2, reduced.reason.c_str(),
+      static_cast<long long>(quarter.frame), kWidth / 4, kHeight / 4, quarter.reason.c_str());
   EXPECT_EQ(lost_full, 0);
   EXPECT_EQ(lost_reduced, 0);
+  EXPECT_EQ(lost_quarter, 0);
   ASSERT_GE(full.frame, 0) << "the box was never deleted";
   ASSERT_GE(reduced.frame, 0) << "the box was never deleted with the reduced cast";
   // The visibility rule deletes the box, or, on the frame it leaves, the association rule:
@@ -131,8 +137,12 @@ TEST(SlamVisibility, ALeavingObjectIsDeletedWhenItsSilhouetteIsTooSmall) {
       << full.reason;
   EXPECT_EQ(rule(reduced.reason), rule(full.reason)) << reduced.reason;
   EXPECT_NE(reduced.reason.find("(ray cast at 160x120)"), std::string::npos) << reduced.reason;
+  ASSERT_GE(quarter.frame, 0) << "the box was never deleted with the quarter-width cast";
+  EXPECT_EQ(rule(quarter.reason), rule(full.reason)) << quarter.reason;
+  EXPECT_NE(quarter.reason.find("(ray cast at 80x60)"), std::string::npos) << quarter.reason;
   EXPECT_LE(std::abs(full.frame - gt_frame), kGroundTruthFrameTolerance);
   EXPECT_LE(std::abs(reduced.frame - full.frame), kReducedFrameTolerance);
+  EXPECT_LE(std::abs(quarter.frame - full.frame), kReducedFrameTolerance);
 }
 
 }  // namespace
