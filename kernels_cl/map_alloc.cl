@@ -9,7 +9,9 @@
 //                        from the top of the device free list (one atomic per new block); when
 //                        the free list cannot serve it, the block is counted as dropped and stays
 //                        unallocated. Marked (or, with integrate_all, every) allocated block is
-//                        appended to the volume's block list for integration. Clears the marks.
+//                        appended to the volume's block list for integration; with phases > 1 a
+//                        marked block only in its phase ((x + y + z) mod phases == phase) or when
+//                        it got its slot now. Clears the marks.
 //   finalize_allocation  one work-item: pops the granted slots off the free list, publishes the
 //                        frame's report and resets the per-frame counters.
 // Volume life cycle:
@@ -46,20 +48,22 @@
 //   measured surface (depth d) lies outside the grid are counted (a moving background follows
 //   the camera only when it sees past the grid).
 // Only the pixels of `rect` (x0, y0, width, height; inside the image) are visited: the whole
-// image, or the rectangle an object's grid projects to (no other pixel's segment reaches it).
+// image, or the rectangle an object's grid projects to (no other pixel's segment reaches it);
+// of those, every `stride`-th pixel in x and y from the rectangle's corner.
 // Only the blocks in [mark_lo, mark_hi) (block coordinates, inside the grid) are marked: the
 // whole grid, or the part of an object's grid its E-step can give pixels to.
-// Launch ceil(rect width / EMF_W) x rect height work items.
+// Launch ceil(ceil(rect width / stride) / EMF_W) x ceil(rect height / stride) work items.
 __kernel void mark_blocks(__global const float* depth, const int width, const int4 rect,
-                          const float fx, const float fy, const float cx, const float cy,
-                          const float4 r0, const float4 r1, const float4 r2, const float block_size,
-                          const float truncation, const int4 dims, const int4 mark_lo,
-                          const int4 mark_hi, __global uchar* needed, __global int* volume_state) {
-  const int x0 = rect.x + get_global_id(0) * EMF_W;
-  const int y = rect.y + get_global_id(1);
+                          const int stride, const float fx, const float fy, const float cx,
+                          const float cy, const float4 r0, const float4 r1, const float4 r2,
+                          const float block_size, const float truncation, const int4 dims,
+                          const int4 mark_lo, const int4 mark_hi, __global uchar* needed,
+                          __global int* volume_state) {
+  const int x0 = rect.x + get_global_id(0) * EMF_W * stride;
+  const int y = rect.y + get_global_id(1) * stride;
   const int x_end = rect.x + rect.z;
   if (x0 >= x_end || y >= rect.y + rect.w) return;
-  const intW xs = (intW)(x0) + EMF_LANE_IDS;
+  const intW xs = (intW)(x0) + EMF_LANE_IDS * stride;
   const intW in_row = xs < x_end;
   const intW xr = in_row ? xs : x0;  // lanes past the row end read their row's first pixel
   floatW d;
@@ -137,7 +141,8 @@ __kernel void mark_blocks(__global const float* depth, const int width, const in
 }
 
 __kernel void assign_blocks(__global uchar* needed, __global int* index, __global int* count_index,
-                            const int has_counts, const int block_count, const int integrate_all,
+                            const int has_counts, const int block_count, const int4 dims,
+                            const int integrate_all, const int phases, const int phase,
                             __global const int* free_list, __global int* pool_state,
                             __global int* volume_state, __global int* block_list) {
   const int i = get_global_id(0);
@@ -145,7 +150,8 @@ __kernel void assign_blocks(__global uchar* needed, __global int* index, __globa
   const int need = needed[i];
   if (need) needed[i] = 0;
   int slot = index[i];
-  if (need && slot < 0) {
+  const int fresh = need && slot < 0;
+  if (fresh) {
     const int k = has_counts ? 2 : 1;
     const int t = atomic_add(&pool_state[EMF_POOL_TAKEN], k);
     const int free_count = pool_state[EMF_POOL_FREE];  // constant during this kernel
@@ -160,7 +166,12 @@ __kernel void assign_blocks(__global uchar* needed, __global int* index, __globa
       atomic_inc(&volume_state[EMF_VOL_DROPPED]);
     }
   }
-  if (slot >= 0 && (need || integrate_all)) {
+  int in_phase = 1;
+  if (phases > 1 && !fresh) {
+    const int4 b = emf_block_coords(dims, i);
+    in_phase = (b.x + b.y + b.z) % phases == phase;
+  }
+  if (slot >= 0 && ((need && in_phase) || integrate_all)) {
     block_list[atomic_inc(&volume_state[EMF_VOL_LIST])] = i;
   }
 }

@@ -16,6 +16,8 @@
 //   d > truncation                 free space: tsdf = 1 with weight q(u), or 1 when
 //                                  free_space_full_weight (the authors' code)
 //   psi <- (W psi + w tsdf) / (W + w),  W <- min(W_max, W + w)   (skipped when w <= 0)
+//   w is scaled by weight_scale: n when the volume integrates each block on every n-th frame
+//   (VolumeSpec::integrate_every), so that a voxel averages and forgets over as many frames.
 // count_blocks (object volumes, detection frames): with the detection mask m (p_fg of the
 // detection per pixel; NaN where the object is occluded or no update is wanted), voxels in the
 // band (|d| <= truncation) get Fg += m(u), Bg += 1 - m(u). Same projection as integrate_blocks;
@@ -70,7 +72,8 @@ __kernel __attribute__((reqd_work_group_size(EMF_INTEGRATE_ITEMS, 1, 1))) void i
     const int has_weights, const int width, const int height, const float fx, const float fy,
     const float cx, const float cy, const float4 r0, const float4 r1, const float4 r2,
     const float voxel_size, const float truncation, const float inv_truncation,
-    const float max_weight, const int free_space_full_weight, const int behind_dropoff) {
+    const float max_weight, const int free_space_full_weight, const int behind_dropoff,
+    const float weight_scale) {
   const int lin = block_list[get_group_id(0)];
   const int slot = index[lin];
   const int plane = dims.x * dims.y;
@@ -114,6 +117,7 @@ __kernel __attribute__((reqd_work_group_size(EMF_INTEGRATE_ITEMS, 1, 1))) void i
     const floatW drop = (truncation + sdf) / (truncation - voxel_size);
     w = sdf < -voxel_size ? w * (drop > 0.0f ? drop : 0.0f) : w;
   }
+  w *= weight_scale;
   __global int* words = (__global int*)voxels + slot * EMF_BLOCK_VOXELS + get_local_id(0) * EMF_W;
   const intW raw = vloadW(0, words);
   const intW old_t = EMF_WORD_TSDF(raw);

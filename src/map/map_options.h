@@ -16,6 +16,15 @@ struct MapOptions {
   double truncation_voxels = 10.0;
   /// Weight cap W_max of the background (objects: objects.max_weight).
   double max_weight = 64.0;
+  /// Each background block of the frame's truncation band is integrated on every n-th frame
+  /// that sees it (a 3-D checkerboard of n phases; new blocks at once), each observation weighing
+  /// n (a voxel averages and forgets over as many frames): 1/n of the blocks per frame. 1 = every
+  /// frame (the paper).
+  int integrate_every = 1;
+  /// The background's blocks of the frame's truncation band are found from every n-th pixel in x
+  /// and y (blocks are 8 voxels across: at 640x480 and 1 cm, two pixels are 1 cm apart at 2.6 m).
+  /// 1 = every pixel.
+  int mark_stride = 1;
   /// Integrate free-space voxels with weight 1 whatever the association (authors' code).
   bool free_space_full_weight = true;
   /// Initial camera placement: offset of the camera from the background volume centre along
@@ -50,6 +59,10 @@ struct MapOptions {
     b.real("max_weight", max_weight, 1.0, 127.0, "",
            "TSDF weight cap W_max of the background (storage limit 127; objects: "
            "objects.max_weight)");
+    b.integer("integrate_every", integrate_every, 1, 8, "frames",
+              "each background block of the band is integrated every n-th frame (1 = all)");
+    b.integer("mark_stride", mark_stride, 1, 4, "px",
+              "the background's band blocks are found from every n-th pixel in x and y");
     b.boolean("free_space_full_weight", free_space_full_weight,
               "integrate free space with weight 1 regardless of association");
     b.real("initial_camera_face_offset", initial_camera_face_offset, 0.0, 0.5, "extent",

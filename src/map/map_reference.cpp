@@ -36,10 +36,11 @@ float sampleSdf(const VolumeHostView& v, const Eigen::Vector3f& p, Eigen::Vector
 
 std::vector<uint8_t> markBlocksReference(const cv::Mat& depth_m, const CameraF& cam,
                                          const PoseRows& T_volume_camera, float block_size_m,
-                                         float truncation_m, const Eigen::Vector3i& dims) {
+                                         float truncation_m, const Eigen::Vector3i& dims,
+                                         int stride) {
   std::vector<uint8_t> needed(static_cast<size_t>(dims.x()) * dims.y() * dims.z(), 0);
-  for (int y = 0; y < cam.height; ++y) {
-    for (int x = 0; x < cam.width; ++x) {
+  for (int y = 0; y < cam.height; y += stride) {
+    for (int x = 0; x < cam.width; x += stride) {
       const float d = depth_m.at<float>(y, x);
       if (!valid(d) || d <= 0.0f || d > kMaxMarkDepthM) continue;
       const Eigen::Vector3f ray = pixelRay(x, y, cam);
@@ -84,10 +85,17 @@ std::vector<uint8_t> markBlocksReference(const cv::Mat& depth_m, const CameraF& 
 }
 
 std::vector<int> blockListReference(const VolumeHostData& vol, const std::vector<uint8_t>& marked,
-                                    bool integrate_all) {
+                                    bool integrate_all, int phases, int phase,
+                                    const std::vector<int32_t>* index_before) {
   std::vector<int> list;
   for (size_t i = 0; i < vol.index.size(); ++i) {
-    if (vol.index[i] >= 0 && (marked[i] || integrate_all)) list.push_back(static_cast<int>(i));
+    if (vol.index[i] < 0) continue;
+    bool in_phase = true;
+    if (phases > 1 && !(index_before && (*index_before)[i] < 0)) {
+      const Eigen::Vector3i b = blockCoords(vol.dims_blocks, static_cast<int>(i));
+      in_phase = (b.x() + b.y() + b.z()) % phases == phase;
+    }
+    if ((marked[i] && in_phase) || integrate_all) list.push_back(static_cast<int>(i));
   }
   return list;
 }
@@ -95,7 +103,7 @@ std::vector<int> blockListReference(const VolumeHostData& vol, const std::vector
 void integrateReference(VolumeHostData& vol, const std::vector<int>& block_list,
                         const cv::Mat& depth_m, const cv::Mat& weights, const cv::Mat& fg_mask,
                         const CameraF& cam, const PoseRows& T_camera_volume, float max_weight,
-                        bool free_space_full_weight, bool behind_dropoff) {
+                        bool free_space_full_weight, bool behind_dropoff, float weight_scale) {
   const float truncation = vol.truncation_m;
   const float inv_truncation = 1.0f / truncation;
   const float vs = vol.voxel_size_m;
@@ -131,6 +139,7 @@ void integrateReference(VolumeHostData& vol, const std::vector<int>& block_list,
         const float drop = (truncation + sdf) / (truncation - vs);
         w = w * (drop > 0.0f ? drop : 0.0f);
       }
+      w *= weight_scale;
       if (w > 0.0f) {
         Voxel& vox = vol.voxels[static_cast<size_t>(slot) * kBlockVoxels + lid];
         const float w_old = static_cast<float>(vox.weight_q) / kWeightScale;

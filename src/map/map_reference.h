@@ -14,22 +14,28 @@
 namespace emf::map {
 
 /// mark_blocks: 1 for every grid block within +-truncation_m of a valid depth along its pixel
-/// ray. depth_m: CV_32F metres (NaN invalid).
+/// ray, of every stride-th pixel in x and y. depth_m: CV_32F metres (NaN invalid).
 std::vector<uint8_t> markBlocksReference(const cv::Mat& depth_m, const CameraF& cam,
                                          const PoseRows& T_volume_camera, float block_size_m,
-                                         float truncation_m, const Eigen::Vector3i& dims_blocks);
+                                         float truncation_m, const Eigen::Vector3i& dims_blocks,
+                                         int stride = 1);
 
 /// integrate_blocks on a host copy: integrates into the listed blocks (linear grid indices)
 /// of `vol` in place. weights / fg_mask: CV_32F of the depth's size or empty (absent).
+/// weight_scale multiplies every observation's weight (VolumeSpec::integrate_every).
 void integrateReference(VolumeHostData& vol, const std::vector<int>& block_list,
                         const cv::Mat& depth_m, const cv::Mat& weights, const cv::Mat& fg_mask,
                         const CameraF& cam, const PoseRows& T_camera_volume, float max_weight,
-                        bool free_space_full_weight, bool behind_dropoff = false);
+                        bool free_space_full_weight, bool behind_dropoff = false,
+                        float weight_scale = 1.0f);
 
 /// The blocks integrate_blocks processes after an allocation: allocated in `vol` and marked
-/// (or every allocated block when integrate_all), in grid order.
+/// (or every allocated block when integrate_all), in grid order. With phases > 1 a marked block
+/// only when (x + y + z) mod phases == phase or it had no slot before (`index_before`, the
+/// volume's index before the allocation; VolumeSpec::integrate_every).
 std::vector<int> blockListReference(const VolumeHostData& vol, const std::vector<uint8_t>& marked,
-                                    bool integrate_all);
+                                    bool integrate_all, int phases = 1, int phase = 0,
+                                    const std::vector<int32_t>* index_before = nullptr);
 
 /// One volume for raycastReference.
 struct HostRenderItem {

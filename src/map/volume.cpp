@@ -37,6 +37,8 @@ VolumeSpec VolumeSpec::background(const MapOptions& options) {
   s.truncation_m = static_cast<float>(options.truncation_voxels * options.background_voxel_m);
   s.free_space_full_weight = options.free_space_full_weight;
   s.max_weight = static_cast<float>(options.max_weight);
+  s.integrate_every = options.integrate_every;
+  s.mark_stride = options.mark_stride;
   return s;
 }
 
@@ -197,22 +199,26 @@ AllocationReport Volume::allocate(const IntegrationInput& frame) {
       mark_hi.s[a] = static_cast<cl_int>(std::clamp(hi, 0.0, static_cast<double>(dims.s[a])));
     }
   }
+  const int stride = std::max(1, spec_.mark_stride);
   cl::setArgs(mark_, *frame.depth, static_cast<cl_int>(k.width), rect_arg,
-              static_cast<cl_float>(k.fx), static_cast<cl_float>(k.fy), static_cast<cl_float>(k.cx),
-              static_cast<cl_float>(k.cy), row4(T_volume_camera, 0), row4(T_volume_camera, 1),
-              row4(T_volume_camera, 2), static_cast<cl_float>(block_m),
+              static_cast<cl_int>(stride), static_cast<cl_float>(k.fx), static_cast<cl_float>(k.fy),
+              static_cast<cl_float>(k.cx), static_cast<cl_float>(k.cy), row4(T_volume_camera, 0),
+              row4(T_volume_camera, 1), row4(T_volume_camera, 2), static_cast<cl_float>(block_m),
               static_cast<cl_float>(spec_.truncation_m), dims, mark_lo, mark_hi, needed_, state_);
-  // ctx_.lanes() pixels of a row per work item.
+  // ctx_.lanes() pixels of a row per work item, every stride-th pixel and row.
   if (!rect.empty()) {
+    const int columns = (rect.width + stride - 1) / stride;
     cl::enqueue(ctx_.queue(), mark_,
-                static_cast<size_t>((rect.width + ctx_.lanes() - 1) / ctx_.lanes()),
-                static_cast<size_t>(rect.height), 0, 4, 16);
+                static_cast<size_t>((columns + ctx_.lanes() - 1) / ctx_.lanes()),
+                static_cast<size_t>((rect.height + stride - 1) / stride), 0, 4, 16);
   }
 
   const cl_int block_count = spec_.blockCount();
+  const cl_int phases = std::max(1, spec_.integrate_every);
+  const cl_int phase = static_cast<cl_int>(allocations_++ % phases);
   cl::setArgs(assign_, needed_, index_, countIndex(), static_cast<cl_int>(spec_.has_counts),
-              block_count, static_cast<cl_int>(spec_.integrate_all_blocks), pool_.freeList(),
-              pool_.state(), state_, block_list_);
+              block_count, dims, static_cast<cl_int>(spec_.integrate_all_blocks), phases, phase,
+              pool_.freeList(), pool_.state(), state_, block_list_);
   cl::enqueue(ctx_.queue(), assign_, static_cast<size_t>(block_count), 0, 0, 256);
   cl::setArgs(finalize_, pool_.state(), state_);
   cl::enqueue(ctx_.queue(), finalize_, 1);
@@ -221,7 +227,8 @@ AllocationReport Volume::allocate(const IntegrationInput& frame) {
   last_report_.allocated_blocks = report_[1];
   last_report_.dropped_blocks = report_[2];
   last_report_.new_blocks = report_[3];
-  last_report_.outside_pixels = report_[4];
+  last_report_.outside_pixels = report_[4] * stride * stride;
+  last_report_.phase = phase;
   pool_.recordAllocation(last_report_.dropped_blocks);
   return last_report_;
 }
@@ -240,7 +247,8 @@ void Volume::integrate(const IntegrationInput& frame) {
       row4(T_camera_volume, 0), row4(T_camera_volume, 1), row4(T_camera_volume, 2),
       static_cast<cl_float>(spec_.voxel_size_m), static_cast<cl_float>(spec_.truncation_m),
       static_cast<cl_float>(1.0f / spec_.truncation_m), static_cast<cl_float>(spec_.max_weight),
-      static_cast<cl_int>(spec_.free_space_full_weight), static_cast<cl_int>(spec_.behind_dropoff));
+      static_cast<cl_int>(spec_.free_space_full_weight), static_cast<cl_int>(spec_.behind_dropoff),
+      static_cast<cl_float>(std::max(1, spec_.integrate_every)));
   // ctx_.lanes() voxels per work item.
   const size_t items = static_cast<size_t>(kBlockVoxels / ctx_.lanes());
   cl::enqueue(ctx_.queue(), integrate_, blocks * items, 0, 0, items);

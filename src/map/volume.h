@@ -48,6 +48,15 @@ struct VolumeSpec {
   /// TSDF weight cap W_max (docs/method.md#integration): map.max_weight for the background,
   /// objects.max_weight for objects.
   float max_weight = 64.0f;
+  /// Blocks of the truncation band are integrated on every n-th frame that lists them, in n
+  /// phases of a 3-D checkerboard ((x + y + z) mod n of the block); a block that gets its slot
+  /// this frame is integrated at once. Each observation then weighs n, so that a voxel averages
+  /// and forgets over as many frames as when integrated on every frame. 1 = every frame (the
+  /// paper). map.integrate_every for the background; objects integrate every frame.
+  int integrate_every = 1;
+  /// The truncation band's blocks are found from every n-th pixel in x and y (1 = every pixel).
+  /// map.mark_stride for the background; objects mark from every pixel.
+  int mark_stride = 1;
 
   /// The background of docs/method.md#background-volume from map.background_voxel_m /
   /// background_resolution (rounded up to whole blocks) / truncation_voxels.
@@ -92,7 +101,9 @@ struct AllocationReport {
   int dropped_blocks = 0;    // blocks needed this frame that found no slot (pool exhausted)
   int new_blocks = 0;        // blocks that got a slot in this allocation
   int outside_pixels = 0;    // valid pixels whose measured surface lies outside the grid
-                             // (of IntegrationInput::pixels when set)
+                             // (of IntegrationInput::pixels when set; those marked from, times
+                             // mark_stride^2)
+  int phase = 0;             // the checkerboard phase listed (VolumeSpec::integrate_every)
 };
 
 /// A host copy of a volume (tests, mesh extraction): its blocks gathered into a compact array.
@@ -193,6 +204,7 @@ class Volume {
   cl::KernelHandle mark_, assign_, finalize_, integrate_, count_, release_, reindex_, evict_;
   AllocationReport last_report_;
   int32_t report_[5] = {0, 0, 0, 0, 0};
+  int64_t allocations_ = 0;  // allocate() calls: the integration phase (integrate_every)
 };
 
 }  // namespace emf::map

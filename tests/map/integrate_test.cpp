@@ -71,6 +71,41 @@ TEST_F(Integration, AllocationMarksTheTruncationBandAsTheReference) {
   EXPECT_EQ(again.listed_blocks, expected);
 }
 
+TEST_F(Integration, AllocationFromEveryNthPixelMarksTheReferencesBlocks) {
+  // map.mark_stride 2: the device marks exactly the reference's blocks from every second pixel
+  // in x and y, a subset of those of every pixel that misses only band slivers.
+  map::MapOptions o = smallOptions();
+  o.mark_stride = 2;
+  map::VoxelPool pool(ctx(), o);
+  const map::VolumeSpec spec = map::VolumeSpec::background(o);
+  ASSERT_EQ(spec.mark_stride, 2);
+  const Eigen::Isometry3d T_wc =
+      lookAt(Eigen::Vector3d(0.4, -0.1, 0.2), Eigen::Vector3d(0.0, 0.3, 2.0));
+  map::Volume vol(pool, spec, map::backgroundVolumePose(o, spec, Eigen::Isometry3d::Identity()));
+  const core::Intrinsics k = testIntrinsics(320, 240);
+  const Scene scene;
+  Frame f = makeFrame(renderDepth(scene, k, T_wc), k, T_wc);
+  const map::AllocationReport rep = vol.allocate(f.input);
+  const map::VolumeHostData h = vol.download();
+  const map::PoseRows T_vc = map::PoseRows::from(vol.T_world_volume().inverse() * T_wc);
+  const float block_m = static_cast<float>(map::kBlockSize) * spec.voxel_size_m;
+  const std::vector<uint8_t> every = map::markBlocksReference(
+      f.depth_host, cameraF(k), T_vc, block_m, spec.truncation_m, spec.dims_blocks, 1);
+  const std::vector<uint8_t> second = map::markBlocksReference(
+      f.depth_host, cameraF(k), T_vc, block_m, spec.truncation_m, spec.dims_blocks, 2);
+  int n_every = 0, n_second = 0;
+  for (size_t i = 0; i < every.size(); ++i) {
+    ASSERT_EQ(h.index[i] >= 0, second[i] != 0) << "block " << i;
+    ASSERT_TRUE(every[i] || !second[i]) << "block " << i;
+    n_every += every[i];
+    n_second += second[i];
+  }
+  EXPECT_EQ(rep.listed_blocks, n_second);
+  constexpr double kMinShare = 0.97;  // slivers of the band seen by odd pixels alone
+  EXPECT_GE(n_second, kMinShare * n_every);
+  EXPECT_LT(n_second, n_every);  // the scene has such slivers: the stride is in effect
+}
+
 TEST_F(Integration, AllocationOverTheGridsImageRectangleMarksTheSameBlocks) {
   // An object-sized grid (0.64 m) in front of the camera: allocation over the rectangle its box
   // projects to marks exactly the blocks of a whole-image pass; a rectangle cut in half fewer.
@@ -301,6 +336,71 @@ TEST_F(Integration, WeightCapAndRunningAverage) {
     capped += v.weight_q == 5 * 256;
   }
   EXPECT_GT(capped, 10000);
+}
+
+TEST_F(Integration, EveryNthFrameIntegratesEachBandBlockInItsPhase) {
+  // map.integrate_every 2: the band's blocks are integrated on alternate frames in a 3-D
+  // checkerboard ((x + y + z) mod 2 == the allocation's phase), each observation with weight 2;
+  // a block that gets its slot is integrated at once. fuseAndCompare checks every voxel against
+  // the reference's block list and weights.
+  map::MapOptions o = smallOptions();
+  o.integrate_every = 2;
+  map::VoxelPool pool(ctx(), o);
+  const map::VolumeSpec spec = map::VolumeSpec::background(o);
+  ASSERT_EQ(spec.integrate_every, 2);
+  const Eigen::Isometry3d T0 = Eigen::Isometry3d::Identity();
+  map::Volume vol(pool, spec, map::backgroundVolumePose(o, spec, T0));
+  const core::Intrinsics k = testIntrinsics(160, 120);
+  const Scene scene;
+  const Frame f0 = makeFrame(renderDepth(scene, k, T0), k, T0);
+  map::VolumeHostData h;
+  ASSERT_EQ(fuseAndCompare(vol, f0, &h), 0);
+  const map::AllocationReport r0 = vol.lastReport();
+  EXPECT_EQ(r0.phase, 0);
+  EXPECT_EQ(r0.listed_blocks, r0.new_blocks);  // all new: all integrated
+  ASSERT_EQ(fuseAndCompare(vol, f0, &h), 0);
+  const map::AllocationReport r1 = vol.lastReport();
+  EXPECT_EQ(r1.phase, 1);
+  EXPECT_EQ(r1.new_blocks, 0);
+  EXPECT_GT(r1.listed_blocks, r1.allocated_blocks * 35 / 100);
+  EXPECT_LT(r1.listed_blocks, r1.allocated_blocks * 65 / 100);
+  // The same view twice, each observation weighing 2: odd blocks hold weight 4 where the frame
+  // observed them, even blocks 2.
+  auto block_max_weight = [](const map::VolumeHostData& d, size_t lin) {
+    int w = 0;
+    const size_t base = static_cast<size_t>(d.index[lin]) * map::kBlockVoxels;
+    for (int i = 0; i < map::kBlockVoxels; ++i) w = std::max<int>(w, d.voxels[base + i].weight_q);
+    return w;
+  };
+  int odd = 0, even = 0;
+  for (size_t lin = 0; lin < h.index.size(); ++lin) {
+    if (h.index[lin] < 0) continue;
+    const Eigen::Vector3i b = map::blockCoords(h.dims_blocks, static_cast<int>(lin));
+    const bool is_odd = (b.x() + b.y() + b.z()) % 2 == 1;
+    const int w = block_max_weight(h, lin);
+    if (w == 0) continue;  // a marked block's corner may see no voxel centre
+    ASSERT_EQ(w, is_odd ? 4 * 256 : 2 * 256) << "block " << lin;
+    (is_odd ? odd : even)++;
+  }
+  EXPECT_GT(odd, 50);
+  EXPECT_GT(even, 50);
+  // A view that reveals new blocks (phase 0 again): the new odd blocks are integrated too.
+  const Eigen::Isometry3d T1 =
+      lookAt(Eigen::Vector3d(0.4, -0.1, 0.2), Eigen::Vector3d(0.0, 0.3, 2.0));
+  const std::vector<int32_t> index_before = h.index;
+  ASSERT_EQ(fuseAndCompare(vol, makeFrame(renderDepth(scene, k, T1), k, T1), &h), 0);
+  EXPECT_EQ(vol.lastReport().phase, 0);
+  EXPECT_GT(vol.lastReport().new_blocks, 10);
+  int new_odd = 0, new_odd_observed = 0;
+  for (size_t lin = 0; lin < h.index.size(); ++lin) {
+    if (h.index[lin] < 0 || index_before[lin] >= 0) continue;
+    const Eigen::Vector3i b = map::blockCoords(h.dims_blocks, static_cast<int>(lin));
+    if ((b.x() + b.y() + b.z()) % 2 == 0) continue;
+    ++new_odd;
+    new_odd_observed += block_max_weight(h, lin) > 0;
+  }
+  EXPECT_GT(new_odd, 5);
+  EXPECT_GE(new_odd_observed, new_odd * 9 / 10);  // a marked block's corner may see no voxel
 }
 
 TEST_F(Integration, AVolumesOwnWeightCapOverridesTheMaps) {

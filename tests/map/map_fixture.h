@@ -27,6 +27,10 @@ inline map::MapOptions smallOptions() {
   o.memory_mb = 32;
   o.background_voxel_m = 0.02;
   o.background_resolution = 256;
+  // The paper's integration (every block of the band, found from every pixel): the tests compare
+  // block for block; those of map.integrate_every and map.mark_stride set them.
+  o.integrate_every = 1;
+  o.mark_stride = 1;
   return o;
 }
 
@@ -85,9 +89,10 @@ class MapTest : public WithClQueue {
     const map::VolumeSpec& s = vol.spec();
     const map::PoseRows T_vc =
         map::PoseRows::from(vol.T_world_volume().inverse() * f.input.T_world_camera);
-    const std::vector<uint8_t> marked = map::markBlocksReference(
-        f.depth_host, cameraF(f.input.intrinsics), T_vc,
-        static_cast<float>(map::kBlockSize) * s.voxel_size_m, s.truncation_m, s.dims_blocks);
+    const std::vector<uint8_t> marked =
+        map::markBlocksReference(f.depth_host, cameraF(f.input.intrinsics), T_vc,
+                                 static_cast<float>(map::kBlockSize) * s.voxel_size_m,
+                                 s.truncation_m, s.dims_blocks, s.mark_stride);
     if (check_alloc && rep.dropped_blocks == 0) {
       // Allocated after = allocated before  U  marked.
       for (size_t i = 0; i < marked.size(); ++i) {
@@ -95,7 +100,8 @@ class MapTest : public WithClQueue {
         EXPECT_EQ(ref.index[i] >= 0, expect) << "block " << i;
       }
     }
-    const std::vector<int> list = map::blockListReference(ref, marked, s.integrate_all_blocks);
+    const std::vector<int> list = map::blockListReference(
+        ref, marked, s.integrate_all_blocks, s.integrate_every, rep.phase, &before.index);
     EXPECT_EQ(static_cast<int>(list.size()), rep.listed_blocks);
     vol.integrate(f.input);
     const map::VolumeHostData dev = vol.download();
@@ -103,7 +109,8 @@ class MapTest : public WithClQueue {
         map::PoseRows::from(f.input.T_world_camera.inverse() * vol.T_world_volume());
     map::integrateReference(ref, list, f.depth_host, f.weights_host, f.mask_host,
                             cameraF(f.input.intrinsics), T_cv, vol.spec().max_weight,
-                            vol.spec().free_space_full_weight, vol.spec().behind_dropoff);
+                            vol.spec().free_space_full_weight, vol.spec().behind_dropoff,
+                            static_cast<float>(std::max(1, s.integrate_every)));
     EXPECT_EQ(dev.index, ref.index);
     EXPECT_EQ(dev.count_index, ref.count_index);
     std::vector<bool> count_slot(dev.voxels.size() / map::kBlockVoxels, false);
