@@ -22,8 +22,7 @@ struct MapOptions {
   /// frame (the paper).
   int integrate_every = 1;
   /// The background's blocks of the frame's truncation band are found from every n-th pixel in x
-  /// and y (blocks are 8 voxels across: at 640x480 and 1 cm, two pixels are 1 cm apart at 2.6 m).
-  /// 1 = every pixel.
+  /// and y (a block is 8 voxels across, far wider than a pixel's footprint). 1 = every pixel.
   int mark_stride = 1;
   /// Integrate free-space voxels with weight 1 whatever the association (authors' code).
   bool free_space_full_weight = true;
