@@ -195,7 +195,8 @@ void ObjectLifecycle::track(const std::vector<Eigen::Isometry3d>& T_oc_predicted
     counters_.add("object_track_iterations", r.iterations);
     logDebug("frame ", frames_, ": object ", o.id, ": ", r.iterations, " it, valid ",
              r.valid_pixels, "/", r.input_pixels, ", inliers ", r.inlier_ratio, ", motion ",
-             r.motion_m, " m ", r.motion_deg, " deg", r.lost ? " LOST " + r.loss_reason : "");
+             r.motion_m, " m ", r.motion_deg, " deg, inverse condition ", r.inverse_condition,
+             r.lost ? " LOST " + r.loss_reason : "");
     if (r.lost) {
       // Keep the object where it was in the world (its pose relative to the camera follows
       // the camera); not integrated this frame.

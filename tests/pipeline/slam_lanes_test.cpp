@@ -35,6 +35,7 @@ struct Poses {
 
 Poses run(const std::string& lanes) {
   synth::Scene scene = test_scene::boxRoomScene("lanes", kBoxId, 0.1, 0.6);
+  scene.objects.back().trajectory.R0 = test_scene::yawed(test_scene::kBoxYawRad);
   // The box slides and turns while the camera sweeps.
   scene.objects.back().trajectory.moves.push_back(
       {0.1, 0.8, Eigen::Vector3d(-0.15, 0.05, 0), Eigen::Vector3d(0, 0, 0.2)});

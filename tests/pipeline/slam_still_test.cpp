@@ -36,6 +36,8 @@ constexpr double kMaxReleaseLagM = 0.005;
 
 synth::Scene pushedBoxScene() {
   synth::Scene s = test_scene::boxRoomScene("pushed-box", kBoxId, 0.2, 0.6);
+  // Turned by kBoxYawRad so that the camera sees two of its sides (test_scene::kBoxYawRad).
+  s.objects.back().trajectory.R0 = test_scene::yawed(test_scene::kBoxYawRad);
   s.objects.back().trajectory.moves.push_back(
       {2.0, 3.0, Eigen::Vector3d(-0.4, 0, 0), Eigen::Vector3d(0, 0, 0.3)});
   // The camera stands still 2.3 m from the box.
