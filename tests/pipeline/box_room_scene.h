@@ -42,11 +42,10 @@ inline synth::Scene boxRoomScene(const std::string& name, int box_id, double box
   return s;
 }
 
-/// A yaw (rad, about the world's z) for a box the camera faces square-on: seen square-on a box
-/// shows only its front and top, planes that leave its sideways translation free (without
-/// depth noise its tracking is refused as degenerate; with noise, the noise sets that
-/// translation, 1-1.5 px off on the still box of slam_still_test.cpp). Turned, two of its sides
-/// fix it.
+/// A yaw (rad, about the world's z) for a box the camera would face square-on. Square-on, a box
+/// shows only its front and top, planes that leave its sideways translation free: without depth
+/// noise its tracking is refused as degenerate, with noise the noise sets that translation
+/// (docs/benchmarks.md, "A box seen square-on"). Turned, two of its sides fix it.
 constexpr double kBoxYawRad = 0.4;
 inline Eigen::Matrix3d yawed(double yaw_rad) {
   return Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
