@@ -371,7 +371,7 @@ int main(int argc, char** argv) {
           if (args.decompose) {
             const Eigen::Isometry3d T_gt = T_wv.inverse() * G;
             const cv::Mat classes = classify(frames[i].depth);
-            const int stride = track_options.pixel_stride;
+            const int stride = tracker.options().pixel_stride;
             const emf::track::NormalEquations all = tracker.evaluate(
                 emf::pipeline::deviceView(volume), pre.vertexMap().get(), nullptr, T_gt, stride);
             for (int c = 0; c < kClasses; ++c) {

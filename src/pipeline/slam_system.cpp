@@ -16,8 +16,8 @@ namespace {
 /// The camera's vertex map is read only by the camera tracker, at every track.pixel_stride-th
 /// pixel (coarse levels at multiples of it), unless the objects share it (objects.filter_depth):
 /// the filter skips the other pixels.
-int cameraSampleStride(const Config& config) {
-  return config.objects.filter_depth ? 1 : std::max(1, config.track.pixel_stride);
+int cameraSampleStride(const Config& config, int width) {
+  return config.objects.filter_depth ? 1 : config.track.pixelStrideFor(width);
 }
 
 }  // namespace
@@ -34,7 +34,8 @@ SlamSystem::SlamSystem(cl::Context& ctx, const Config& config, const core::Intri
       config_(config),
       intrinsics_(core::checkedIntrinsics(intrinsics)),
       pool_(std::make_unique<map::VoxelPool>(ctx, config.map)),
-      preprocessor_(ctx, config.preprocess, intrinsics, cameraSampleStride(config)),
+      preprocessor_(ctx, config.preprocess, intrinsics,
+                    cameraSampleStride(config, intrinsics.width)),
       tracker_(ctx, config.track, intrinsics.width, intrinsics.height),
       estep_(ctx, config.em, intrinsics.width, intrinsics.height, 1 + config.objects.max_objects),
       timer_(stageNames(), 4096),
@@ -120,7 +121,7 @@ FrameOutcome SlamSystem::process(const core::Frame& frame,
       // The camera's weights: q_0 only, at the pixels the camera tracker reads.
       estep_.computeBackgroundWeights(objects_->vertexMap(),
                                       objects_->eStepVolumes(T_world_predicted, T_oc_predicted),
-                                      std::max(1, config_.track.pixel_stride));
+                                      tracker_.options().pixel_stride);
       ctx_.finish();
     }
     {

@@ -1,6 +1,7 @@
 // Options of preprocessing (section `preprocess`) and pose tracking (section `track`).
 #pragma once
 
+#include <algorithm>
 #include <string>
 
 #include "common/option_binder.h"
@@ -105,8 +106,13 @@ struct TrackOptions {
   // the paper's settings (every pixel, one level, LM's own convergence test, plain steps;
   // bench/track_bench compares them, docs/benchmarks.md#the-slam-against-a-peer-benchslam_bench).
   // Object tracking uses every pixel (pipeline::objectTrackOptions).
-  /// Use every n-th pixel in x and y at the finest level (1 = all pixels).
-  int pixel_stride = 2;
+  /// Use every n-th pixel in x and y at the finest level (1 = all pixels); 0 = by the image's
+  /// width, every (width / 160)-th pixel and at least every 2nd (2 at 320x240, 4 at 640x480: the
+  /// same density on the scene). pixelStrideFor resolves it; Tracker does so on construction.
+  int pixel_stride = 0;
+  int pixelStrideFor(int width) const {
+    return pixel_stride > 0 ? pixel_stride : std::max(2, width / 160);
+  }
   /// Extra coarse levels run before the finest one, level l using stride pixel_stride * 2^l.
   int coarse_levels = 1;
   /// LM iteration cap on each coarse level (the finest level uses max_iterations).
@@ -190,8 +196,8 @@ struct TrackOptions {
            "LM damping growth factor after a rejected step (doubles per further rejection)");
     b.real("huber_truncation_factor", huber_truncation_factor, 0.0, 10.0, "truncation",
            "Huber delta as a fraction of the truncation distance");
-    b.integer("pixel_stride", pixel_stride, 1, 16, "px",
-              "use every n-th pixel in x and y at the finest level");
+    b.integer("pixel_stride", pixel_stride, 0, 16, "px",
+              "use every n-th pixel in x and y at the finest level (0 = width / 160, at least 2)");
     b.integer("coarse_levels", coarse_levels, 0, 4, "",
               "coarse levels (stride doubled per level) run before the finest level");
     b.integer("coarse_max_iterations", coarse_max_iterations, 1, 1000, "",

@@ -213,6 +213,7 @@ double balancedInverseCondition(const Matrix6d& H_origin) {
 
 Tracker::Tracker(cl::Context& ctx, const TrackOptions& options, int width, int height)
     : ctx_(ctx), options_(options), width_(width), height_(height) {
+  options_.pixel_stride = options.pixelStrideFor(width);
   if (width <= 0 || height <= 0) {
     std::ostringstream s;
     s << "tracking: image size " << width << "x" << height << " is invalid";

@@ -4,6 +4,7 @@
 #include "track/tracker.h"
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <memory>
 #include <random>
@@ -883,7 +884,7 @@ TEST_F(TrackerTest, PointsGivenToAnotherVolumeDoNotCountAgainstTheInlierRatio) {
   EXPECT_LT(translationError(r.T_volume_camera, T_gt), kPoseToleranceM);
   // The loss rule's ratio is the reference's q-weighted share at the pose it ended at.
   const NormalEquations ref = accumulateReference(
-      room_->host->view(), vertex, q, o.pixel_stride, r.T_volume_camera,
+      room_->host->view(), vertex, q, tracker.options().pixel_stride, r.T_volume_camera,
       o.huber_truncation_factor * room_->host->truncation_m, nullptr, nullptr,
       o.inlier_noise_per_m2, false, o.inlier_truncation_factor * room_->host->truncation_m);
   ASSERT_GT(ref.valid_weight, 0.0);
@@ -1148,12 +1149,14 @@ TEST_F(TrackerTest, RealPairAccumulationMatchesReference) {
 
 TEST_F(TrackerTest, RealPairRecoversGroundTruthMotion) {
   // Measured: the two starts' tight minima 0.005 / 0.07 mm and 0.0002 / 0.005 deg apart; the
-  // default early exit (1e-4) 0.03 / 0.10 mm and 0.002 / 0.009 deg from the minimum.
+  // default early exit (1e-4) 0.16 / 0.41 mm and 0.024 / 0.024 deg from the minimum at 640x480's
+  // default stride (every 4th pixel; 0.03 / 0.10 mm and 0.002 / 0.009 deg on every 2nd), a
+  // tenth of what the data pin down (below).
   constexpr double kTightEarlyExit = 1e-6;
   constexpr double kSameMinimumM = 1e-4;
   constexpr double kSameMinimumRad = 0.01 * kDeg;
-  constexpr double kEarlyExitM = 3e-4;
-  constexpr double kEarlyExitRad = 0.03 * kDeg;
+  constexpr double kEarlyExitM = 6e-4;
+  constexpr double kEarlyExitRad = 0.04 * kDeg;
   for (const char* case_dir : {"case_1", "case_2"}) {
     SCOPED_TRACE(case_dir);
     const RealPair p = makeRealPair(ctx(), case_dir);
@@ -1187,6 +1190,9 @@ TEST_F(TrackerTest, RealPairRecoversGroundTruthMotion) {
     EXPECT_LT(rotationError(min_from_gt.T_volume_camera, min_from_prev.T_volume_camera),
               kSameMinimumRad);
     // The default early exit stops close to that minimum.
+    std::printf("%s: the default early exit %.3f mm and %.4f deg from the minimum\n", case_dir,
+                translationError(min_from_gt.T_volume_camera, r.T_volume_camera) * 1e3,
+                rotationError(min_from_gt.T_volume_camera, r.T_volume_camera) / kDeg);
     EXPECT_LT(translationError(min_from_gt.T_volume_camera, r.T_volume_camera), kEarlyExitM);
     EXPECT_LT(rotationError(min_from_gt.T_volume_camera, r.T_volume_camera), kEarlyExitRad);
   }
@@ -1210,6 +1216,24 @@ TEST_F(TrackerTest, RealFrameOfAnotherSceneIsLost) {
   EXPECT_TRUE(r.lost) << "inliers " << r.inlier_ratio << " valid " << r.valid_fraction
                       << " inv cond " << r.inverse_condition;
   EXPECT_EQ(r.loss, TrackLoss::kFewValidPoints) << r.loss_reason;
+}
+
+TEST_F(TrackerTest, DefaultPixelStrideFollowsTheImageWidth) {
+  // track.pixel_stride 0: every (width / 160)-th pixel, at least every 2nd; a set value is kept.
+  const TrackOptions by_width;
+  EXPECT_EQ(by_width.pixel_stride, 0);
+  EXPECT_EQ(by_width.pixelStrideFor(160), 2);
+  EXPECT_EQ(by_width.pixelStrideFor(320), 2);
+  EXPECT_EQ(by_width.pixelStrideFor(480), 3);
+  EXPECT_EQ(by_width.pixelStrideFor(640), 4);
+  EXPECT_EQ(by_width.pixelStrideFor(1280), 8);
+  TrackOptions set;
+  set.pixel_stride = 1;
+  EXPECT_EQ(set.pixelStrideFor(640), 1);
+  // The tracker resolves it for its image.
+  EXPECT_EQ(Tracker(ctx(), by_width, 640, 480).options().pixel_stride, 4);
+  EXPECT_EQ(Tracker(ctx(), by_width, 320, 240).options().pixel_stride, 2);
+  EXPECT_EQ(Tracker(ctx(), set, 640, 480).options().pixel_stride, 1);
 }
 
 }  // namespace
