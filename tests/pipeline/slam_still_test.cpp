@@ -28,7 +28,7 @@ constexpr double kStillBoundM = 0.02;  // objects.still_translation_m under test
 // frame of the release or two may fall either side of the bound.
 constexpr int kMinHeldBeforePush = 28;
 // The box centre's error (m) on the last frame, after the push: tracked to its new place
-// (measured 0.2-0.5 cm with the box turned by 0.4, 0.6 or -0.5 rad, held or not).
+// (measured: docs/benchmarks.md, "A box seen square-on").
 constexpr double kMaxFinalErrorM = 0.01;
 // What holding costs during the push, over the same run without still objects: the frames it
 // takes to release the box (its pose lags) and the model fused at the held pose meanwhile

@@ -1148,10 +1148,9 @@ TEST_F(TrackerTest, RealPairAccumulationMatchesReference) {
 }
 
 TEST_F(TrackerTest, RealPairRecoversGroundTruthMotion) {
-  // Measured: the two starts' tight minima 0.005 / 0.07 mm and 0.0002 / 0.005 deg apart; the
-  // default early exit (1e-4) 0.16 / 0.41 mm and 0.024 / 0.024 deg from the minimum at 640x480's
-  // default stride (every 4th pixel; 0.03 / 0.10 mm and 0.002 / 0.009 deg on every 2nd), a
-  // tenth of what the data pin down (below).
+  // The two starts' tight minima agree far inside kSameMinimum*; the default early exit stops
+  // within kEarlyExit* of the minimum at the default stride, a tenth of what the pairs' data pin
+  // down (below; measured: docs/benchmarks.md, "The camera on every 4th pixel at 640x480").
   constexpr double kTightEarlyExit = 1e-6;
   constexpr double kSameMinimumM = 1e-4;
   constexpr double kSameMinimumRad = 0.01 * kDeg;
