@@ -146,6 +146,10 @@ struct ObjectOptions {
   /// Huber delta of object tracking as a fraction of the object's truncation (the paper's 0.2;
   /// the camera has its own, track.huber_truncation_factor).
   double huber_truncation_factor = 0.2;
+  /// Object tracking's LM stops once its Gauss-Newton step is shorter than this (m and rad mixed;
+  /// 1 mm / 1 mrad, where an object's pose is known to about a centimetre per frame; the camera
+  /// has its own, track.early_exit_step). 0 = LM's own test only (the paper).
+  double track_early_exit_step = 1e-3;
   /// Pull of an object's tracked rotation towards its constant-velocity prediction:
   /// E = this x |rotation off the prediction, rad|^2 / 2 in data-term units (a pixel with full
   /// weight adds r^2 / 2, r in m), for 640x480, scaled with the image area. 0 = off (the paper).
@@ -267,6 +271,9 @@ struct ObjectOptions {
            "most map.truncation_voxels");
     b.real("huber_truncation_factor", huber_truncation_factor, 0.0, 10.0, "truncation",
            "Huber delta of object tracking as a fraction of the object's truncation");
+    b.real("track_early_exit_step", track_early_exit_step, 0.0, 1.0, "m|rad",
+           "object tracking stops when its Gauss-Newton step is below this (0 = LM's own test, "
+           "the paper)");
     b.real("motion_prior_rotation", motion_prior_rotation, 0.0, 1e6, "",
            "pull of an object's tracked rotation towards its prediction, in data-term units at "
            "640x480, scaled with the image area (0 = off, the paper)");

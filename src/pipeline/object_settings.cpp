@@ -8,6 +8,7 @@ namespace emf::pipeline {
 track::TrackOptions objectTrackOptions(const Config& config, int image_width) {
   track::TrackOptions o = config.track;
   o.huber_truncation_factor = config.objects.huber_truncation_factor;
+  o.early_exit_step = config.objects.track_early_exit_step;
   // The data term grows with the pixel count: the prior, given for 640x480, with the area.
   const double area_scale = (image_width / 640.0) * (image_width / 640.0);
   o.prior_rotation_weight = config.objects.motion_prior_rotation * area_scale;

@@ -17,8 +17,8 @@ namespace emf::pipeline {
 track::PreprocessOptions objectPreprocessOptions(const Config& config);
 
 /// The tracking options for object volumes: the camera's (track section) with the object rules
-/// below, objects.huber_truncation_factor and the rotation prior objects.motion_prior_rotation
-/// (scaled from 640x480 to an image `image_width` pixels wide).
+/// below, objects.huber_truncation_factor, objects.track_early_exit_step and the rotation prior
+/// objects.motion_prior_rotation (scaled from 640x480 to an image `image_width` pixels wide).
 track::TrackOptions objectTrackOptions(const Config& config, int image_width);
 
 /// The tracking options of the re-identification fits: objectTrackOptions without the motion
