@@ -163,6 +163,10 @@ struct ObjectOptions {
   double still_translation_m = 0.02;
   double still_rotation_deg = 2.0;
   int still_frames = 15;
+  /// A held object whose tracked pose leaves the still bounds stays held while that pose fits
+  /// the frame's depth better than the held one by less than this fraction of its robust cost
+  /// (em::fitKeepsStill). 0 = released by the bounds alone.
+  double still_release_cost = 0.2;
 
   void bind(OptionBinder& b) {
     // Pixel thresholds refer to 640x480 images; the SLAM scales them with the image width.
@@ -285,6 +289,9 @@ struct ObjectOptions {
            "rotation bound of a still object (with still_translation_m)");
     b.integer("still_frames", still_frames, 2, 1000, "frames",
               "frames an object's tracked poses must stay within the still bounds to hold it");
+    b.real("still_release_cost", still_release_cost, 0.0, 100.0, "",
+           "a held object leaving the still bounds stays held while its tracked pose lowers the "
+           "frame's cost by less than this fraction (0 = released by the bounds alone)");
   }
 };
 

@@ -474,6 +474,14 @@ bool isStillAt(const Eigen::Isometry3d& T_world_held, const Eigen::Isometry3d& T
   return c.centre_m <= options.still_translation_m && c.angle_deg <= options.still_rotation_deg;
 }
 
+bool fitKeepsStill(double cost_change, double held_cost, int common, int valid,
+                   const ObjectOptions& options) {
+  if (options.still_release_cost <= 0.0 || valid <= 0 || 2 * common < valid) return false;
+  const double tracked_cost = held_cost - cost_change;
+  if (!(tracked_cost > 0.0)) return false;
+  return cost_change < options.still_release_cost * tracked_cost;
+}
+
 bool startsMoving(const std::vector<PoseChange>& offsets, const ObjectOptions& options) {
   const size_t n = offsets.size();
   if (options.still_translation_m <= 0.0 || n < static_cast<size_t>(kStartFrames) + 1) {

@@ -240,6 +240,17 @@ bool startsMoving(const std::vector<PoseChange>& offsets, const ObjectOptions& o
 /// Whether the tracked pose T_world_tracked lies within the still bounds of T_world_held.
 bool isStillAt(const Eigen::Isometry3d& T_world_held, const Eigen::Isometry3d& T_world_tracked,
                const Eigen::Vector3d& centre, const ObjectOptions& options);
+/// The data's verdict on a held object whose tracked pose left the still bounds: the frame's
+/// object pixels evaluated at the held pose and at the tracked one, on the pixels that land on
+/// the model at both (`common` of `valid` at the tracked pose). `cost_change` is the robust
+/// cost at the held pose minus that at the tracked one, `held_cost` the cost at the held pose
+/// (any common unit). The object stays held while the tracked pose fits the frame better by
+/// less than objects.still_release_cost of the tracked pose's cost, and at least half the
+/// pixels still land on the model at the held pose: a far or weakly constrained object's
+/// tracked pose wanders along a nearly flat cost, and a moved object leaves the held pose's
+/// cost well above the tracked one's. Always false with still_release_cost 0.
+bool fitKeepsStill(double cost_change, double held_cost, int common, int valid,
+                   const ObjectOptions& options);
 
 /// Step 5, growing: whole blocks (block_voxels per block) to add on the low and high side of
 /// each axis so that every point (volume frame, metres; volume spans [0, dims*block*voxel]) lies

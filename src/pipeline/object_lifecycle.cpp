@@ -210,13 +210,30 @@ void ObjectLifecycle::track(const std::vector<Eigen::Isometry3d>& T_oc_predicted
     o.state = ObjectState::kTracked;
     o.lost_frames = 0;
     o.last_frame = frames_;
-    if (holdStill(o, T_world_camera_ * r.T_volume_camera.inverse())) continue;
+    // The held pose against the tracked one on this frame's pixels (holdStill asks only when
+    // the pose rules release a held object): the tracker's last evaluation is the tracked
+    // pose's, at the finest stride, and evaluate() compares with it.
+    const auto fit_keeps_still = [&](const Eigen::Isometry3d& T_world_held) {
+      const track::NormalEquations held = object_tracker_.evaluate(
+          view, vertex, estep_.q(o.e_step_slot).get(), T_world_held.inverse() * T_world_camera_,
+          object_tracker_.options().pixel_stride, true, &roi);
+      counters_.add("object_track_iterations", 1);
+      const bool keep = em::fitKeepsStill(held.cost_change, held.cost, held.common, r.valid_pixels,
+                                          config_.objects);
+      logDebug("frame ", frames_, ": object ", o.id, " moves by its poses; the held pose costs ",
+               held.cost_change / std::max(held.cost - held.cost_change, 1e-30), " more on ",
+               held.common, " of ", r.valid_pixels, " px: ", keep ? "held" : "released");
+      return keep;
+    };
+    if (holdStill(o, T_world_camera_ * r.T_volume_camera.inverse(), fit_keeps_still)) continue;
     o.last_motion = T_oc_before.inverse() * r.T_volume_camera;
     o.volume->setPose(T_world_camera_ * r.T_volume_camera.inverse());
   }
 }
 
-bool ObjectLifecycle::holdStill(TrackedObject& o, const Eigen::Isometry3d& T_world_tracked) {
+bool ObjectLifecycle::holdStill(
+    TrackedObject& o, const Eigen::Isometry3d& T_world_tracked,
+    const std::function<bool(const Eigen::Isometry3d&)>& fit_keeps_still) {
   const em::ObjectOptions& opt = config_.objects;
   if (opt.still_translation_m <= 0.0) return false;
   // The centre of the region the detections showed (objects.claim_region), else the volume's.
@@ -228,8 +245,9 @@ bool ObjectLifecycle::holdStill(TrackedObject& o, const Eigen::Isometry3d& T_wor
     if (o.held_offsets.size() > static_cast<size_t>(em::kStartFrames) + 1) {
       o.held_offsets.erase(o.held_offsets.begin());
     }
-    if (em::isStillAt(T_world_held, T_world_tracked, centre, opt) &&
-        !em::startsMoving(o.held_offsets, opt)) {
+    if ((em::isStillAt(T_world_held, T_world_tracked, centre, opt) &&
+         !em::startsMoving(o.held_offsets, opt)) ||
+        fit_keeps_still(T_world_held)) {
       o.last_motion = last_motion_;  // still in the world
       return true;
     }

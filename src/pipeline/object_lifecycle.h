@@ -232,8 +232,10 @@ class ObjectLifecycle {
   void countMisses(const std::vector<bool>& matched);
 
   // Still objects (em::looksStill): true when `o` is held at its pose this frame instead of
-  // taking its tracked pose; keeps its recent poses.
-  bool holdStill(TrackedObject& o, const Eigen::Isometry3d& T_world_tracked);
+  // taking its tracked pose; keeps its recent poses. `fit_keeps_still(T_world_held)` evaluates
+  // the frame at the held pose (em::fitKeepsStill), asked only when the pose rules release.
+  bool holdStill(TrackedObject& o, const Eigen::Isometry3d& T_world_tracked,
+                 const std::function<bool(const Eigen::Isometry3d&)>& fit_keeps_still);
   bool createObject(const core::Detection& d, const cv::Mat& vertex);
   void deleteByExistence();
   void checkVisibility(const cv::Mat& depth);

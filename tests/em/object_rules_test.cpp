@@ -552,6 +552,26 @@ TEST(ObjectRules, StillOnceEveryPoseOfTheWindowIsWithinTheBounds) {
   EXPECT_FALSE(looksStill(window, centre, o));
 }
 
+TEST(ObjectRules, AHeldObjectStaysHeldWhileItsTrackedPoseBarelyFitsBetter) {
+  ObjectOptions o;
+  o.still_release_cost = 0.1;
+  // Costs in any common unit: the held pose's cost and its excess over the tracked pose's.
+  // A far object's tracked pose 5 % better than the held one (cost 100 there, 105 held): held.
+  EXPECT_TRUE(fitKeepsStill(5.0, 105.0, 900, 1000, o));
+  // A moved object: the held pose costs 50 % more (or exactly the bound): released.
+  EXPECT_FALSE(fitKeepsStill(50.0, 150.0, 900, 1000, o));
+  EXPECT_FALSE(fitKeepsStill(10.0, 110.0, 900, 1000, o));
+  // Fewer than half the tracked pose's pixels land on the model at the held pose: released.
+  EXPECT_FALSE(fitKeepsStill(5.0, 105.0, 499, 1000, o));
+  EXPECT_TRUE(fitKeepsStill(5.0, 105.0, 500, 1000, o));
+  // Nothing to compare (no pixels, no cost): released, as by the bounds alone.
+  EXPECT_FALSE(fitKeepsStill(0.0, 0.0, 0, 0, o));
+  EXPECT_FALSE(fitKeepsStill(0.0, 0.0, 900, 1000, o));
+  // Off: the bounds alone decide.
+  o.still_release_cost = 0.0;
+  EXPECT_FALSE(fitKeepsStill(5.0, 105.0, 900, 1000, o));
+}
+
 TEST(ObjectRules, OcclusionCountsRenderedPixelsBehindNearerMeasurements) {
   // An object rendered at 2 m on a 4x3 patch; margin 0.05 m + 0.01 z^2 = 0.09 m at 2 m.
   cv::Mat rendered(6, 8, CV_32F, cv::Scalar(NAN));
