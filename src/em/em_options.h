@@ -147,8 +147,8 @@ struct ObjectOptions {
   /// the camera has its own, track.huber_truncation_factor).
   double huber_truncation_factor = 0.2;
   /// Object tracking's LM stops once its Gauss-Newton step is shorter than this (m and rad mixed;
-  /// 1 mm / 1 mrad, where an object's pose is known to about a centimetre per frame; the camera
-  /// has its own, track.early_exit_step). 0 = LM's own test only (the paper).
+  /// far below what an object's depth pins down per frame, docs/method.md#object-tracking; the
+  /// camera has its own, track.early_exit_step). 0 = LM's own test only (the paper).
   double track_early_exit_step = 1e-3;
   /// Pull of an object's tracked rotation towards its constant-velocity prediction:
   /// E = this x |rotation off the prediction, rad|^2 / 2 in data-term units (a pixel with full
