@@ -1,11 +1,11 @@
 // objects_scaling: what each object alive costs per frame. One generated scene with up to eight
-// detected objects (synth:random, 4 movers and 4 still, a perfect detector every 10 frames, the
-// small `xyz` camera motion; seed 4 keeps 7 of them alive at once) is rendered once per image
-// size; the SLAM then runs on the same frames with objects.max_objects = 0, 1, 2, 4, 7 in one
-// invocation (the 0-object run is the baseline). For the frames from --warmup on where exactly that
-// many objects are alive it prints the ms per frame (median, p90) and per stage, and the counts
-// that do not depend on the machine's load: kernel launches, blocking host waits, bytes read
-// back and the objects' tracking steps (Levenberg-Marquardt evaluations of all objects) per
+// detected objects (synth:random, 4 movers and 4 still, a perfect detector every 10 frames or
+// --det-every, the small `xyz` camera motion; seed 4 keeps 7 of them alive at once) is rendered
+// once per image size; the SLAM then runs on the same frames with objects.max_objects = 0, 1, 2, 4,
+// 7 in one invocation (the 0-object run is the baseline). For the frames from --warmup on where
+// exactly that many objects are alive it prints the ms per frame (median, p90) and per stage, and
+// the counts that do not depend on the machine's load: kernel launches, blocking host waits, bytes
+// read back and the objects' tracking steps (Levenberg-Marquardt evaluations of all objects) per
 // frame. Last, the marginal cost of one more object (least-squares slope over the counts that
 // were reached). --kernels adds, per count, the device time and launches per measured frame of
 // each kernel (OpenCL profiling events, cl/kernel_profile.h): where the time goes on the device
@@ -13,7 +13,9 @@
 // (e.g. cl.lanes=8).
 //
 //   objects_scaling [--frames N] [--seed S] [--sizes 320,640] [--counts 0,1,2,4,7]
-//                   [--warmup F] [--kernels] [--set S.K=V]..
+//                   [--warmup F] [--det-every N] [--kernels] [--set S.K=V]..
+// --det-every 30 is the default detector rate (detector.every_n_frames): a detection frame also
+// ray-casts every object and the background at full size to match the masks.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -108,10 +110,10 @@ void printKernels(const std::vector<Row>& rows) {
 
 constexpr const char* kUsage =
     "usage: objects_scaling [--frames N] [--seed S] [--sizes 320,640] [--counts 0,1,2,4,7] "
-    "[--warmup F] [--kernels] [--set S.K=V]..\n";
+    "[--warmup F] [--det-every N] [--kernels] [--set S.K=V]..\n";
 
 int main(int argc, char** argv) {
-  long frames = 120, seed = 4, warmup = 40;
+  long frames = 120, seed = 4, warmup = 40, det_every = 10;
   bool kernels = false;
   std::vector<std::string> sets;  // section.key=value overrides of the defaults
   std::vector<long> sizes = {320, 640}, counts = {0, 1, 2, 4, 7};
@@ -131,6 +133,8 @@ int main(int argc, char** argv) {
         sizes = parseList("--sizes", args.value(), 160, 1280);
       } else if (args.is("--counts")) {
         counts = parseList("--counts", args.value(), 0, 8);
+      } else if (args.is("--det-every")) {
+        det_every = args.integer(1, 100000);
       } else if (args.is("--kernels")) {
         kernels = true;
       } else if (args.is("--set")) {
@@ -156,7 +160,8 @@ int main(int argc, char** argv) {
           "synth:random?seed=" + std::to_string(seed) +
           "&movers=4&still=4&camera=xyz&frames=" + std::to_string(frames) +
           "&width=" + std::to_string(width) + "&height=" + std::to_string(height) +
-          "&det_every=10&det_miss=0&det_fp=0&det_confusion=0&det_spill=0&det_partial=0&det_late=0";
+          "&det_every=" + std::to_string(det_every) +
+          "&det_miss=0&det_fp=0&det_confusion=0&det_spill=0&det_partial=0&det_late=0";
       auto src = emf::sources::openSource(uri, base.source);
       const emf::core::Intrinsics k = src->intrinsics();
       std::vector<emf::core::Frame> scene;

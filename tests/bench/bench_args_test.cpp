@@ -116,6 +116,7 @@ TEST(BenchPrograms, BadArgumentsStopWithExitCode2AndNameTheOption) {
       {"slam_bench", "--no-pear", "unknown option '--no-pear'"},
       {"objects_scaling", "--counts 0,9", "--counts '9': expected an integer in [0, 8]"},
       {"objects_scaling", "--frames 50 --warmup 50", "--warmup must be below --frames"},
+      {"objects_scaling", "--det-every 0", "--det-every '0': expected an integer in [1, 100000]"},
       {"isolation_bench", "--width 10", "--width '10': expected an integer in [64, 4096]"},
       {"dnn_bench", "--instances 21", "--instances '21': expected an integer in [1, 20]"},
       {"dnn_bench", "--depth 640x", "--depth '640x': expected WxH"},
