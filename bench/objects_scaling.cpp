@@ -1,8 +1,8 @@
 // objects_scaling: what each object alive costs per frame. One generated scene with up to eight
 // detected objects (synth:random, 4 movers and 4 still, the small `xyz` camera motion, a perfect
 // detector every 30 frames as detector.every_n_frames, or every --det-every; seed 16 keeps all
-// eight alive on every measured frame) is rendered once per image size; the SLAM then runs on the same
-// frames with objects.max_objects = 0, 1, 2, 4, 8 in one invocation (the 0-object run is the
+// eight alive on every measured frame) is rendered once per image size; the SLAM then runs on the
+// same frames with objects.max_objects = 0, 1, 2, 4, 8 in one invocation (the 0-object run is the
 // baseline). For the frames from --warmup on where exactly that many objects are alive it prints
 // the ms per frame (median, p90) and per stage, and the counts that do not depend on the
 // machine's load: kernel launches, blocking host waits, bytes read back and the objects' tracking
