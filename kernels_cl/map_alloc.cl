@@ -2,10 +2,11 @@
 //
 // Per frame and volume:
 //   mark_blocks          per pixel (EMF_W per work item): marks every block that the pixel's ray
-//   crosses
-//                        within +-truncation of the measured depth (3-D DDA over blocks; plain
-//                        stores of 1, no atomics; the flag after the grid's is scratch).
-//   assign_blocks        one work-item per grid block: a marked block without a slot takes one
+//                        crosses within +-truncation of the measured depth (3-D DDA over blocks;
+//                        plain stores of 1, no atomics; the flag after the grid's is scratch).
+//   assign_blocks        one work-item per EMF_ASSIGN_GROUP grid blocks (a group without a mark
+//                        is skipped after one 16-byte read unless integrate_all; one atomic per
+//                        group appends its listed blocks): a marked block without a slot takes one
 //                        from the top of the device free list (one atomic per new block); when
 //                        the free list cannot serve it, the block is counted as dropped and stays
 //                        unallocated. Marked (or, with integrate_all, every) allocated block is
@@ -140,39 +141,54 @@ __kernel void mark_blocks(__global const float* depth, const int width, const in
   }
 }
 
+// Grid blocks per assign_blocks work item: their flags are one 16-byte word (needed holds whole
+// groups, the scratch flag included).
+#define EMF_ASSIGN_GROUP 16
+
 __kernel void assign_blocks(__global uchar* needed, __global int* index, __global int* count_index,
                             const int has_counts, const int block_count, const int4 dims,
                             const int integrate_all, const int phases, const int phase,
                             __global const int* free_list, __global int* pool_state,
                             __global int* volume_state, __global int* block_list) {
-  const int i = get_global_id(0);
-  if (i >= block_count) return;
-  const int need = needed[i];
-  if (need) needed[i] = 0;
-  int slot = index[i];
-  const int fresh = need && slot < 0;
-  if (fresh) {
-    const int k = has_counts ? 2 : 1;
-    const int t = atomic_add(&pool_state[EMF_POOL_TAKEN], k);
-    const int free_count = pool_state[EMF_POOL_FREE];  // constant during this kernel
-    if (t + k <= free_count) {
-      slot = free_list[free_count - 1 - t];
-      index[i] = slot;
-      if (has_counts) count_index[i] = free_list[free_count - 2 - t];
-      atomic_add(&pool_state[EMF_POOL_GRANTED], k);
-      atomic_inc(&volume_state[EMF_VOL_NEW]);
-    } else {
-      atomic_inc(&pool_state[EMF_POOL_DROPPED]);
-      atomic_inc(&volume_state[EMF_VOL_DROPPED]);
+  const int first = get_global_id(0) * EMF_ASSIGN_GROUP;
+  if (first >= block_count) return;
+  if (!integrate_all) {
+    const uint4 flags = vload4(0, (__global const uint*)(needed + first));
+    if ((flags.x | flags.y | flags.z | flags.w) == 0) return;  // no block of the group marked
+  }
+  int listed[EMF_ASSIGN_GROUP];
+  int n_listed = 0;
+  const int last = min(first + EMF_ASSIGN_GROUP, block_count);
+  for (int i = first; i < last; ++i) {
+    const int need = needed[i];
+    if (need) needed[i] = 0;
+    int slot = index[i];
+    const int fresh = need && slot < 0;
+    if (fresh) {
+      const int k = has_counts ? 2 : 1;
+      const int t = atomic_add(&pool_state[EMF_POOL_TAKEN], k);
+      const int free_count = pool_state[EMF_POOL_FREE];  // constant during this kernel
+      if (t + k <= free_count) {
+        slot = free_list[free_count - 1 - t];
+        index[i] = slot;
+        if (has_counts) count_index[i] = free_list[free_count - 2 - t];
+        atomic_add(&pool_state[EMF_POOL_GRANTED], k);
+        atomic_inc(&volume_state[EMF_VOL_NEW]);
+      } else {
+        atomic_inc(&pool_state[EMF_POOL_DROPPED]);
+        atomic_inc(&volume_state[EMF_VOL_DROPPED]);
+      }
     }
+    int in_phase = 1;
+    if (phases > 1 && !fresh) {
+      const int4 b = emf_block_coords(dims, i);
+      in_phase = (b.x + b.y + b.z) % phases == phase;
+    }
+    if (slot >= 0 && ((need && in_phase) || integrate_all)) listed[n_listed++] = i;
   }
-  int in_phase = 1;
-  if (phases > 1 && !fresh) {
-    const int4 b = emf_block_coords(dims, i);
-    in_phase = (b.x + b.y + b.z) % phases == phase;
-  }
-  if (slot >= 0 && ((need && in_phase) || integrate_all)) {
-    block_list[atomic_inc(&volume_state[EMF_VOL_LIST])] = i;
+  if (n_listed > 0) {
+    const int at = atomic_add(&volume_state[EMF_VOL_LIST], n_listed);
+    for (int k = 0; k < n_listed; ++k) block_list[at + k] = listed[k];
   }
 }
 

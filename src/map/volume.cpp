@@ -16,6 +16,10 @@ namespace {
 constexpr int kCountGroup = 512;      // work items per block in count_blocks (one per voxel)
 constexpr int kVolumeStateInts = 10;  // layout in kernels_cl/map_alloc.cl (EMF_VOL_*)
 constexpr int kVolumeReport = 4;
+constexpr size_t kAssignGroup = 16;  // EMF_ASSIGN_GROUP in kernels_cl/map_alloc.cl
+
+/// Bytes of the needed flags of n blocks: one per block and the scratch flag, in whole groups.
+size_t neededBytes(size_t n) { return (n + 1 + kAssignGroup - 1) / kAssignGroup * kAssignGroup; }
 
 int blocksFor(int voxels) { return (voxels + kBlockSize - 1) / kBlockSize; }
 
@@ -141,17 +145,19 @@ void Volume::createBuffers() {
                                      sizeof(minus_one), 0, n * sizeof(int32_t), 0, nullptr,
                                      nullptr));
   }
-  // One flag per block, and one more that mark_blocks writes for the lanes it does not mark.
-  needed_ = ctx_.buffer(CL_MEM_READ_WRITE, n + 1);
-  EMF_CL_CHECK(clEnqueueFillBuffer(ctx_.queue(), needed_.get(), &zero, sizeof(zero), 0, n + 1, 0,
-                                   nullptr, nullptr));
+  // One flag per block, and one more that mark_blocks writes for the lanes it does not mark;
+  // whole groups of kAssignGroup flags (assign_blocks reads a group at once).
+  const size_t flag_bytes = neededBytes(n);
+  needed_ = ctx_.buffer(CL_MEM_READ_WRITE, flag_bytes);
+  EMF_CL_CHECK(clEnqueueFillBuffer(ctx_.queue(), needed_.get(), &zero, sizeof(zero), 0, flag_bytes,
+                                   0, nullptr, nullptr));
   block_list_ = ctx_.buffer(CL_MEM_READ_WRITE, n * sizeof(int32_t));
   ctx_.finish();
 }
 
 size_t Volume::indexBytes() const {
   const size_t n = static_cast<size_t>(spec_.blockCount());
-  return n * (sizeof(int32_t) * (spec_.has_counts ? 3 : 2) + 1) + 1 + kVolumeStateInts * 4;
+  return n * sizeof(int32_t) * (spec_.has_counts ? 3 : 2) + neededBytes(n) + kVolumeStateInts * 4;
 }
 
 cl_int4 Volume::dimsBlocks() const {
@@ -219,7 +225,8 @@ AllocationReport Volume::allocate(const IntegrationInput& frame) {
   cl::setArgs(assign_, needed_, index_, countIndex(), static_cast<cl_int>(spec_.has_counts),
               block_count, dims, static_cast<cl_int>(spec_.integrate_all_blocks), phases, phase,
               pool_.freeList(), pool_.state(), state_, block_list_);
-  cl::enqueue(ctx_.queue(), assign_, static_cast<size_t>(block_count), 0, 0, 256);
+  cl::enqueue(ctx_.queue(), assign_,
+              static_cast<size_t>((block_count + kAssignGroup - 1) / kAssignGroup), 0, 0, 64);
   cl::setArgs(finalize_, pool_.state(), state_);
   cl::enqueue(ctx_.queue(), finalize_, 1);
   ctx_.read(state_, report_, sizeof(report_), kVolumeReport * sizeof(int32_t));

@@ -7,7 +7,8 @@
 // Device state, allocated when the volume is created (or grown), never per frame:
 //   index        int per grid block: pool slot of its TSDF block, -1 = unallocated
 //   count_index  (objects) int per grid block: pool slot of its (Fg, Bg) count block
-//   needed       uchar per grid block: blocks marked by the current frame
+//   needed       uchar per grid block (+ 1 scratch, in whole groups of 16): blocks marked by
+//                the current frame
 //   block_list   int per grid block: the blocks to integrate this frame
 //   state        int[10]: allocation counters and the last report
 // Per frame: allocate() (mark + assign + finalize, then one 20-byte read of the report) and

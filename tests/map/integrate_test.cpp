@@ -1,5 +1,6 @@
 // Block allocation and TSDF integration on the device (PoCL) against the CPU references, on
 // analytic scenes and on a real Kinect frame.
+#include <algorithm>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
@@ -69,6 +70,49 @@ TEST_F(Integration, AllocationMarksTheTruncationBandAsTheReference) {
   EXPECT_EQ(again.new_blocks, 0);
   EXPECT_EQ(again.allocated_blocks, expected);
   EXPECT_EQ(again.listed_blocks, expected);
+}
+
+TEST_F(Integration, AllocationReachesTheLastBlockOfAGridOfAnyBlockCount) {
+  // assign_blocks visits the flags in groups of 16 and skips unmarked groups: a grid of 5 x 7 x 3
+  // = 105 blocks ends in a partial group, which holds the scratch flag too. A wall 1 m ahead
+  // crosses the grid's last z-slab, whose far corner block (the last index) sits on the optical
+  // axis: every marked block, that one included, gets its slot, for a volume that lists only the
+  // marked blocks (background) and for one that lists all (object), on a second frame too.
+  const map::MapOptions o = smallOptions();
+  const core::Intrinsics k = testIntrinsics(160, 120);
+  const Eigen::Isometry3d T_wc = Eigen::Isometry3d::Identity();
+  constexpr float kWallM = 1.0f;
+  Frame f = makeFrame(cv::Mat(k.height, k.width, CV_32F, cv::Scalar(kWallM)), k, T_wc);
+  for (const bool object : {false, true}) {
+    SCOPED_TRACE(object ? "object volume" : "background volume");
+    map::VoxelPool pool(ctx(), o);
+    map::VolumeSpec spec =
+        object ? map::VolumeSpec::object(o, 64, 0.02f) : map::VolumeSpec::background(o);
+    spec.dims_blocks = Eigen::Vector3i(5, 7, 3);
+    const int n = spec.blockCount();
+    ASSERT_NE(n % 16, 0);
+    const double block_m = map::kBlockSize * static_cast<double>(spec.voxel_size_m);
+    Eigen::Isometry3d T_wv = Eigen::Isometry3d::Identity();  // last block's centre on the axis
+    T_wv.translation() = Eigen::Vector3d(0.0, 0.0, kWallM) -
+                         (spec.dims_blocks.cast<double>().array() - 0.5).matrix() * block_m;
+    map::Volume vol(pool, spec, T_wv);
+    const std::vector<uint8_t> marked = map::markBlocksReference(
+        f.depth_host, cameraF(k), map::PoseRows::from(T_wv.inverse() * T_wc),
+        static_cast<float>(block_m), spec.truncation_m, spec.dims_blocks);
+    const int expected = static_cast<int>(std::count(marked.begin(), marked.end(), 1));
+    ASSERT_EQ(marked.back(), 1);
+    for (int frame = 0; frame < 2; ++frame) {
+      const map::AllocationReport rep = vol.allocate(f.input);
+      const map::VolumeHostData h = vol.download();
+      for (int i = 0; i < n; ++i) {
+        ASSERT_EQ(h.index[static_cast<size_t>(i)] >= 0, marked[static_cast<size_t>(i)] != 0)
+            << "block " << i << ", frame " << frame;
+      }
+      EXPECT_EQ(rep.allocated_blocks, expected);
+      EXPECT_EQ(rep.new_blocks, frame == 0 ? expected : 0);
+      EXPECT_EQ(rep.listed_blocks, expected);  // all allocated blocks are marked here
+    }
+  }
 }
 
 TEST_F(Integration, AllocationFromEveryNthPixelMarksTheReferencesBlocks) {
