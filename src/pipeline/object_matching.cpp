@@ -108,7 +108,14 @@ std::vector<const core::Detection*> ObjectLifecycle::usableDetections(
                  "' ignored: its mask is not a CV_32F image of the frame size");
       continue;
     }
-    if (em::detectionUse(d, config_.objects) == em::DetectionUse::kUse) usable.push_back(&d);
+    const em::DetectionUse use = em::detectionUse(d, config_.objects);
+    if (use == em::DetectionUse::kUse) {
+      usable.push_back(&d);
+    } else if (use == em::DetectionUse::kTooSmall) {
+      logDebug("frame ", frames_, ": detection '", d.class_name, "' dropped: its box (",
+               d.box.width, "x", d.box.height, " px) has a side below objects.min_detection_px ",
+               config_.objects.min_detection_px, " (at this image size)");
+    }
   }
   return usable;
 }
