@@ -53,8 +53,8 @@ __kernel void estep_likelihood_lanes(
     __global const short2* voxels, const float voxel_size, const float truncation,
     const float sigma, const float alpha, const float p_uniform, const float min_weight,
     const int pfg_mode, const int first, const EStepCover cover, const int stride,
-    __global float* likelihood, __global float* sum, __global float* best,
-    __global float* residual) {
+    __global float* likelihood, __global float* sum, __global float* best, __global float* residual,
+    __global int* claimed_rects, const int volume) {
   const int gx = get_global_id(0) * EMF_W;  // first lane's column of the grid
   const int gy = get_global_id(1);
   if (gx >= rect.z || gy >= rect.w) return;
@@ -108,12 +108,17 @@ __kernel void estep_likelihood_lanes(
     lik = inside ? lik_in : 0.0f;
     abs_psi = inside ? abs_psi_in : NAN;
   }
+  // A later volume's likelihood of 0 leaves the sum and the best as they are (x + 0 = x for the
+  // sum's x >= 0, fmax(x, 0) = x, and 0 > best never holds): an item without a positive lane
+  // neither reads nor writes them.
+  const int update = first || any(lik > 0.0f);
 #define ESTEP_STORE(l)                            \
   if (0x##l < lanes) {                            \
     const int u = base + stride * 0x##l;          \
     const float lk = lik.s##l, ap = abs_psi.s##l; \
     likelihood[u] = lk;                           \
-    if (pfg_mode) {                               \
+    if (!update) {                                \
+    } else if (pfg_mode) {                        \
       if (first) {                                \
         sum[u] = 0.0f;                            \
         residual[u] = ap;                         \
@@ -134,6 +139,33 @@ __kernel void estep_likelihood_lanes(
   }
   EMF_LANES(ESTEP_STORE)
 #undef ESTEP_STORE
+  // An object's claimed pixels (likelihood > 0, hence q > 0): their bounding rectangle as
+  // (min x, min y, -max x, -max y) in claimed_rects[4 volume ..], all kept by atomic_min (the
+  // host fills them with INT_MAX before the pass). Read first: most items change
+  // nothing, and atomics are costly on CPUs.
+  const intW claims = (lik > 0.0f) & (EMF_LANE_IDS < lanes);
+  if (!first && any(claims)) {
+    // The first and the last claiming lane, by halving (no branch per lane).
+    intW lo = select((intW)(EMF_W), EMF_LANE_IDS, claims);
+    intW hi = select((intW)(-1), EMF_LANE_IDS, claims);
+#if EMF_W == 16
+    const int8 lo8 = min(lo.lo, lo.hi), hi8 = max(hi.lo, hi.hi);
+#elif EMF_W == 8
+    const int8 lo8 = lo, hi8 = hi;
+#endif
+#if EMF_W >= 8
+    const int4 lo4 = min(lo8.lo, lo8.hi), hi4 = max(hi8.lo, hi8.hi);
+#else
+    const int4 lo4 = lo, hi4 = hi;
+#endif
+    const int2 lo2 = min(lo4.lo, lo4.hi), hi2 = max(hi4.lo, hi4.hi);
+    const int x_lo = col + stride * min(lo2.x, lo2.y), x_hi = col + stride * max(hi2.x, hi2.y);
+    __global int* claimed = claimed_rects + 4 * volume;
+    if (claimed[0] > x_lo) atomic_min(&claimed[0], x_lo);
+    if (claimed[1] > row) atomic_min(&claimed[1], row);
+    if (claimed[2] > -x_hi) atomic_min(&claimed[2], -x_hi);
+    if (claimed[3] > -row) atomic_min(&claimed[3], -row);
+  }
 }
 
 /// q_i(u) = likelihood_i(u) / sum(u) (0 where the sum is 0) over the grid `rect` (x0, y0,

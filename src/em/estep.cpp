@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <limits>
 
+#include "cl/cl_error.h"
+#include "cl/work_counters.h"
 #include "common/error.h"
 #include "map/map_math.h"
 
@@ -104,6 +106,8 @@ EStep::EStep(cl::Context& ctx, const EmOptions& options, int width, int height, 
   sum_ = ctx.buffer(CL_MEM_READ_WRITE, bytes);
   best_ = ctx.buffer(CL_MEM_READ_WRITE, bytes);
   residual_ = ctx.buffer(CL_MEM_READ_WRITE, bytes);
+  claimed_ = ctx.buffer(CL_MEM_READ_WRITE, sizeof(cl_int) * 4 * static_cast<size_t>(max_volumes));
+  host_claimed_.assign(4 * static_cast<size_t>(max_volumes), 0);
   likelihood_lanes_ = ctx.kernel("estep", "estep_likelihood_lanes");
   normalize_ = ctx.kernel("estep", "estep_normalize");
   clear_ = ctx.kernel("estep", "estep_clear");
@@ -205,6 +209,23 @@ void EStep::compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes,
   last_objects_.swap(keys_);
   last_vertex_ = vertex_map;
   reused_ = reuse;
+  // Reused likelihoods keep the rectangles of the pass that sampled them.
+  claimed_read_ = false;
+}
+
+cv::Rect EStep::claimedPixels(int i) {
+  if (i < 1 || i >= count_) {
+    throw InvalidArgument("EStep::claimedPixels: volume " + std::to_string(i) + " of " +
+                          std::to_string(count_));
+  }
+  if (rects_[static_cast<size_t>(i)].empty()) return cv::Rect();  // no pass: q is 0 everywhere
+  if (!claimed_read_) {
+    ctx_.read(claimed_, host_claimed_.data(), sizeof(cl_int) * 4 * static_cast<size_t>(count_));
+    claimed_read_ = true;
+  }
+  const cl_int* c = host_claimed_.data() + 4 * static_cast<size_t>(i);
+  if (c[0] == std::numeric_limits<cl_int>::max()) return cv::Rect();  // no pixel claimed
+  return cv::Rect(c[0], c[1], -c[2] - c[0] + 1, -c[3] - c[1] + 1);
 }
 
 void EStep::setRectsAndKeys(const std::vector<EStepVolume>& volumes) {
@@ -232,6 +253,14 @@ void EStep::enqueueLikelihood(cl_mem vertex_map, const EStepVolume& v, int i, co
   const cl_float4 claim_lo = {{v.claim.lo.x(), v.claim.lo.y(), v.claim.lo.z(), 0.0f}};
   const cl_float4 claim_hi = {{v.claim.hi.x(), v.claim.hi.y(), v.claim.hi.z(), 0.0f}};
   const cl_int pfg_mode = options_.association == Association::kPfg ? 1 : 0;
+  if (i > 0) {
+    // The pass keeps the rectangle of the pixels it gives a likelihood above 0.
+    const cl_int none = std::numeric_limits<cl_int>::max();
+    EMF_CL_CHECK(clEnqueueFillBuffer(ctx_.queue(), claimed_.get(), &none, sizeof(none),
+                                     sizeof(cl_int) * 4 * static_cast<size_t>(i),
+                                     sizeof(cl_int) * 4, 0, nullptr, nullptr));
+    cl::countLaunch();
+  }
   // ctx_.lanes() pixels of a row per work item.
   cl::setArgs(likelihood_lanes_, vertex_map, width_, rectArg(grid), rows[0], rows[1], rows[2],
               v.view.index, has_counts ? v.count_index : v.view.index, has_counts, dims, claim_lo,
@@ -239,7 +268,8 @@ void EStep::enqueueLikelihood(cl_mem vertex_map, const EStepVolume& v, int i, co
               static_cast<float>(options_.sigma_m), static_cast<float>(options_.alpha),
               static_cast<float>(options_.p_uniform), static_cast<float>(options_.min_weight),
               pfg_mode, static_cast<cl_int>(i == 0 ? 1 : 0), cover, static_cast<cl_int>(stride),
-              likelihood_[static_cast<size_t>(i)].get(), sum_.get(), best_.get(), residual_.get());
+              likelihood_[static_cast<size_t>(i)].get(), sum_.get(), best_.get(), residual_.get(),
+              claimed_.get(), static_cast<cl_int>(i));
   cl::enqueue(ctx_.queue(), likelihood_lanes_,
               static_cast<size_t>((grid.width + ctx_.lanes() - 1) / ctx_.lanes()),
               static_cast<size_t>(grid.height), 0, kLikelihoodLocalX, kLikelihoodLocalY);

@@ -106,6 +106,13 @@ class EStep {
   int volumeCount() const { return count_; }
   int maxVolumes() const { return static_cast<int>(q_.size()); }
 
+  /// The bounding rectangle of the pixels where q(i) > 0 (object i >= 1) after the last
+  /// compute(); empty when there are none. Kept by the likelihood pass on the device; the first
+  /// call after a compute() reads all volumes' rectangles back at once (one blocking read).
+  /// Throws InvalidArgument for i outside 1 .. volumeCount() - 1 (every i after
+  /// computeBackgroundWeights(), which gives no object's q).
+  cv::Rect claimedPixels(int i);
+
   /// Blocking downloads (outputs, tests): CV_32F images of the frame size.
   cv::Mat downloadQ(int i) const;
   /// Rows row0 .. row0 + rows - 1 of q(i) (CV_32F, rows x width; throws for a bad range).
@@ -139,6 +146,11 @@ class EStep {
 
   std::vector<cl::MemHandle> q_, likelihood_;
   cl::MemHandle sum_, best_, residual_;
+  // Per volume (min x, min y, -max x, -max y) of its likelihood pass's pixels with a likelihood
+  // above 0 (kernels_cl/estep.cl), and the host's copy once read after the last compute().
+  cl::MemHandle claimed_;
+  std::vector<cl_int> host_claimed_;
+  bool claimed_read_ = false;
   cl::KernelHandle likelihood_lanes_, normalize_, clear_, accumulate_;
   std::vector<ObjectKey> last_objects_, keys_;
   cl_mem last_vertex_ = nullptr;

@@ -189,8 +189,12 @@ void ObjectLifecycle::track(const std::vector<Eigen::Isometry3d>& T_oc_predicted
     const track::PixelRect roi = track::volumeImageBounds(
         (view.dims_blocks.cast<double>() * map::kBlockSize) * view.voxel_size_m, T_oc_predicted[k],
         intrinsics_);
-    const track::TrackResult r =
-        object_tracker_.track(view, vertex, estep_.q(o.e_step_slot).get(), T_oc_predicted[k], &roi);
+    // ... and, within that, only the work-groups that meet the pixels with q > 0.
+    const cv::Rect claimed = estep_.claimedPixels(o.e_step_slot);
+    const track::PixelRect inputs{claimed.x, claimed.y, claimed.x + claimed.width,
+                                  claimed.y + claimed.height};
+    const track::TrackResult r = object_tracker_.track(view, vertex, estep_.q(o.e_step_slot).get(),
+                                                       T_oc_predicted[k], &roi, &inputs);
     counters_.add("object_track_pixels", roi.area());
     counters_.add("object_track_iterations", r.iterations);
     logDebug("frame ", frames_, ": object ", o.id, ": ", r.iterations, " it, valid ",
@@ -216,7 +220,7 @@ void ObjectLifecycle::track(const std::vector<Eigen::Isometry3d>& T_oc_predicted
     const auto fit_keeps_still = [&](const Eigen::Isometry3d& T_world_held) {
       const track::NormalEquations held = object_tracker_.evaluate(
           view, vertex, estep_.q(o.e_step_slot).get(), T_world_held.inverse() * T_world_camera_,
-          object_tracker_.options().pixel_stride, true, &roi);
+          object_tracker_.options().pixel_stride, true, &roi, &inputs);
       counters_.add("object_track_iterations", 1);
       const bool keep = em::fitKeepsStill(held.cost_change, held.cost, held.common, r.valid_pixels,
                                           config_.objects);

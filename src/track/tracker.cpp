@@ -289,7 +289,8 @@ PixelRect boxImageBounds(const Eigen::AlignedBox3d& box, const Eigen::Isometry3d
   return r;
 }
 
-Tracker::GridRange Tracker::gridRange(int stride, const PixelRect* roi) const {
+Tracker::GridRange Tracker::gridRange(int stride, const PixelRect* roi,
+                                      const PixelRect* inputs) const {
   GridRange g;
   g.su1 = (width_ + stride - 1) / stride;
   g.sv1 = (height_ + stride - 1) / stride;
@@ -301,20 +302,35 @@ Tracker::GridRange Tracker::gridRange(int stride, const PixelRect* roi) const {
     g.su1 = std::max(g.su0, std::min(g.su1, cell(roi->x1)));
     g.sv1 = std::max(g.sv0, std::min(g.sv1, cell(roi->y1)));
   }
+  if (inputs) {
+    // The work-groups (kLanes * kLocalX cells by kLocalY rows, counted from su0, sv0) that meet
+    // the inputs' cells; the groups kept hold the same pixels as before.
+    const GridRange in = gridRange(stride, inputs, nullptr);
+    const int u0 = std::max(in.su0, g.su0), u1 = std::min(in.su1, g.su1);
+    const int v0 = std::max(in.sv0, g.sv0), v1 = std::min(in.sv1, g.sv1);
+    if (u0 >= u1 || v0 >= v1) return GridRange{g.su0, g.sv0, g.su0, g.sv0};
+    constexpr int kGroupCols = kLanes * kLocalX, kGroupRows = kLocalY;
+    const auto groupsUpTo = [](int cells, int per) { return (cells + per - 1) / per * per; };
+    g.su1 = std::min(g.su1, g.su0 + groupsUpTo(u1 - g.su0, kGroupCols));
+    g.sv1 = std::min(g.sv1, g.sv0 + groupsUpTo(v1 - g.sv0, kGroupRows));
+    g.su0 += (u0 - g.su0) / kGroupCols * kGroupCols;
+    g.sv0 += (v0 - g.sv0) / kGroupRows * kGroupRows;
+  }
   return g;
 }
 
-int Tracker::numGroups(int stride, const PixelRect* roi) const {
-  const GridRange g = gridRange(stride, roi);
+int Tracker::numGroups(int stride, const PixelRect* roi, const PixelRect* inputs) const {
+  const GridRange g = gridRange(stride, roi, inputs);
   const int items_x = (g.su1 - g.su0 + kLanes - 1) / kLanes;
   return ((items_x + kLocalX - 1) / kLocalX) * ((g.sv1 - g.sv0 + kLocalY - 1) / kLocalY);
 }
 
 NormalEquations Tracker::evaluate(const map::VolumeDeviceView& volume, cl_mem vertex_map, cl_mem q,
                                   const Eigen::Isometry3d& T_volume_camera, int stride,
-                                  bool compare_with_last, const PixelRect* roi) {
-  const NormalEquations ne =
-      evaluateCandidate(volume, vertex_map, q, T_volume_camera, stride, compare_with_last, roi);
+                                  bool compare_with_last, const PixelRect* roi,
+                                  const PixelRect* inputs) {
+  const NormalEquations ne = evaluateCandidate(volume, vertex_map, q, T_volume_camera, stride,
+                                               compare_with_last, roi, inputs);
   current_ = 1 - current_;
   return ne;
 }
@@ -332,12 +348,13 @@ cv::Mat Tracker::lastPixelCosts() const {
 
 NormalEquations Tracker::evaluateCandidate(const map::VolumeDeviceView& volume, cl_mem vertex_map,
                                            cl_mem q, const Eigen::Isometry3d& T_volume_camera,
-                                           int stride, bool compare, const PixelRect* roi) {
+                                           int stride, bool compare, const PixelRect* roi,
+                                           const PixelRect* inputs) {
   checkVolume(volume);
   if (!vertex_map) throw InvalidArgument("tracking: vertex map buffer is null");
   if (stride < 1) throw InvalidArgument("tracking: pixel stride must be >= 1");
-  const GridRange grid = gridRange(stride, roi);
-  const int groups = numGroups(stride, roi);
+  const GridRange grid = gridRange(stride, roi, inputs);
+  const int groups = numGroups(stride, roi, inputs);
   if (groups == 0) return NormalEquations();  // an empty rectangle: no pixel, no terms
   const Eigen::Matrix4f M = T_volume_camera.matrix().cast<float>();
   cl_float4 rows[3];
@@ -389,7 +406,8 @@ Tracker::LevelResult Tracker::runLevel(const map::VolumeDeviceView& volume, cl_m
                                        cl_mem q, int stride, int max_iterations, double tau,
                                        double inv_max_weight, Eigen::Isometry3d* T,
                                        NormalEquations* at_T, const PixelRect* roi,
-                                       const Eigen::Isometry3d& T_prior, double prior_scale) {
+                                       const PixelRect* inputs, const Eigen::Isometry3d& T_prior,
+                                       double prior_scale) {
   // Levenberg-Marquardt (Madsen, Nielsen & Tingleff, "Methods for non-linear least squares
   // problems", 2004, alg. 3.16) on left increments; all terms scaled by 1 / max W. The actual
   // cost reduction of a step is measured over the pixels valid at both poses.
@@ -463,7 +481,8 @@ Tracker::LevelResult Tracker::runLevel(const map::VolumeDeviceView& volume, cl_m
     }
     const Vector6d h = scale * h_lm;
     const Eigen::Isometry3d T_new = applyLeftIncrement(M.transpose() * h, *T);
-    const NormalEquations ne = evaluateCandidate(volume, vertex_map, q, T_new, stride, true, roi);
+    const NormalEquations ne =
+        evaluateCandidate(volume, vertex_map, q, T_new, stride, true, roi, inputs);
     ++res.iterations;
     const Vector6d dev_new = with_prior ? priorDeviation(T_new) : Vector6d::Zero();
     const double actual = -ne.cost_change * inv_max_weight + priorCost(dev) - priorCost(dev_new);
@@ -499,23 +518,24 @@ Tracker::LevelResult Tracker::runLevel(const map::VolumeDeviceView& volume, cl_m
 }
 
 TrackResult Tracker::track(const map::VolumeDeviceView& volume, cl_mem vertex_map, cl_mem q,
-                           const Eigen::Isometry3d& T_volume_camera_init, const PixelRect* roi) {
+                           const Eigen::Isometry3d& T_volume_camera_init, const PixelRect* roi,
+                           const PixelRect* inputs) {
   TrackResult result;
   result.T_volume_camera = T_volume_camera_init;
   Eigen::Isometry3d T = T_volume_camera_init;
   const int levels = options_.coarse_levels;
   NormalEquations ne =
-      evaluate(volume, vertex_map, q, T, options_.pixel_stride << levels, false, roi);
+      evaluate(volume, vertex_map, q, T, options_.pixel_stride << levels, false, roi, inputs);
   double inv_max_weight = 0.0;
   if (ne.max_weight > 0.0) inv_max_weight = 1.0 / ne.max_weight;
   bool finest_converged = false;
   double tau = options_.lm_tau;
   for (int level = levels; level >= 0 && inv_max_weight > 0.0; --level) {
     const int stride = options_.pixel_stride << level;
-    if (level != levels) ne = evaluate(volume, vertex_map, q, T, stride, false, roi);
+    if (level != levels) ne = evaluate(volume, vertex_map, q, T, stride, false, roi, inputs);
     const int cap = level == 0 ? options_.max_iterations : options_.coarse_max_iterations;
     const LevelResult lr =
-        runLevel(volume, vertex_map, q, stride, cap, tau, inv_max_weight, &T, &ne, roi,
+        runLevel(volume, vertex_map, q, stride, cap, tau, inv_max_weight, &T, &ne, roi, inputs,
                  T_volume_camera_init, 1.0 / static_cast<double>(1 << (2 * level)));
     result.iterations += lr.iterations;
     finest_converged = lr.converged;

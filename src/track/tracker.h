@@ -163,16 +163,22 @@ class Tracker {
   /// association weights, or nullptr for all ones. `roi` (optional): only its pixels are
   /// evaluated; the caller guarantees q = 0 outside it (e.g. volumeImageBounds of an object at
   /// the E-step's pose), so the result is that of the whole image up to summation order, for
-  /// work in proportion to the rectangle.
+  /// work in proportion to the rectangle. `inputs` (optional): a rectangle outside which q = 0
+  /// as well (e.g. em::EStep::claimedPixels, the bounding rectangle of the pixels with q > 0);
+  /// the work-groups of roi's grid that lie wholly outside it are not launched. Those groups'
+  /// sums are zero and the others hold the same pixels, so the result is the same to the bit.
   TrackResult track(const map::VolumeDeviceView& volume, cl_mem vertex_map, cl_mem q,
-                    const Eigen::Isometry3d& T_volume_camera_init, const PixelRect* roi = nullptr);
+                    const Eigen::Isometry3d& T_volume_camera_init, const PixelRect* roi = nullptr,
+                    const PixelRect* inputs = nullptr);
 
   /// One device evaluation of the normal equations at T (unnormalised, like
   /// accumulateReference). With compare_with_last, cost_change/common compare with the
-  /// per-pixel costs of the previous evaluate() call (same stride). For tests and benchmarks.
+  /// per-pixel costs of the previous evaluate() call (same stride, roi and inputs). `roi` and
+  /// `inputs` as in track().
   NormalEquations evaluate(const map::VolumeDeviceView& volume, cl_mem vertex_map, cl_mem q,
                            const Eigen::Isometry3d& T_volume_camera, int stride,
-                           bool compare_with_last = false, const PixelRect* roi = nullptr);
+                           bool compare_with_last = false, const PixelRect* roi = nullptr,
+                           const PixelRect* inputs = nullptr);
   /// Per-pixel (cost, weight c) of the last evaluate() call (CV_32FC2; cost NaN where the sample
   /// was not valid; weight 0 unless step_acceptance is fixed_weights; pixels not sampled at that
   /// stride keep stale values). Blocking read; for tests.
@@ -192,9 +198,10 @@ class Tracker {
   int width() const { return width_; }
   int height() const { return height_; }
   /// Work-group size of the accumulation kernel and the number of groups used at `stride`
-  /// (over the whole image, or over `roi`).
+  /// (over the whole image, or over `roi`, less the groups outside `inputs`).
   static int localSize();
-  int numGroups(int stride, const PixelRect* roi = nullptr) const;
+  int numGroups(int stride, const PixelRect* roi = nullptr,
+                const PixelRect* inputs = nullptr) const;
   /// Local memory one work-group of the accumulation kernel uses on this device (bytes).
   size_t kernelLocalMemoryBytes() const;
 
@@ -207,18 +214,19 @@ class Tracker {
   // LM on one level; at_T holds the evaluation at *T (its per-pixel costs in costs_[current_]).
   LevelResult runLevel(const map::VolumeDeviceView& volume, cl_mem vertex_map, cl_mem q, int stride,
                        int max_iterations, double tau, double inv_max_weight, Eigen::Isometry3d* T,
-                       NormalEquations* at_T, const PixelRect* roi,
+                       NormalEquations* at_T, const PixelRect* roi, const PixelRect* inputs,
                        const Eigen::Isometry3d& T_prior, double prior_scale);
   // Evaluates at T writing per-pixel costs to costs_[1 - current_], comparing with
   // costs_[current_] if `compare`. The caller swaps current_ to accept.
   NormalEquations evaluateCandidate(const map::VolumeDeviceView& volume, cl_mem vertex_map,
                                     cl_mem q, const Eigen::Isometry3d& T, int stride, bool compare,
-                                    const PixelRect* roi);
-  // The sampled grid cells [su0, su1) x [sv0, sv1) at `stride` covering `roi` (or the image).
+                                    const PixelRect* roi, const PixelRect* inputs);
+  // The sampled grid cells [su0, su1) x [sv0, sv1) at `stride` covering `roi` (or the image),
+  // less the whole work-groups of that grid outside `inputs` (when given).
   struct GridRange {
     int su0 = 0, sv0 = 0, su1 = 0, sv1 = 0;
   };
-  GridRange gridRange(int stride, const PixelRect* roi) const;
+  GridRange gridRange(int stride, const PixelRect* roi, const PixelRect* inputs) const;
 
   cl::Context& ctx_;
   TrackOptions options_;

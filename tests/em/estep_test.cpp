@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -109,6 +110,21 @@ cv::Mat backProject(const cv::Mat& depth, const core::Intrinsics& k) {
   return vertex;
 }
 
+// The bounding rectangle of the pixels with q > 0 (empty: none).
+cv::Rect positiveBounds(const cv::Mat& q) {
+  int x0 = q.cols, y0 = q.rows, x1 = -1, y1 = -1;
+  for (int v = 0; v < q.rows; ++v) {
+    for (int u = 0; u < q.cols; ++u) {
+      if (!(q.at<float>(v, u) > 0.0f)) continue;
+      x0 = std::min(x0, u);
+      y0 = std::min(y0, v);
+      x1 = std::max(x1, u);
+      y1 = std::max(y1, v);
+    }
+  }
+  return x1 < 0 ? cv::Rect() : cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
+}
+
 class EStepModes : public test::WithClContext, public ::testing::WithParamInterface<const char*> {};
 
 TEST_P(EStepModes, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
@@ -171,6 +187,14 @@ TEST_P(EStepModes, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
                                  {d_2.view, c_2.get(), host[2].T_volume_camera, {}, {}}});
   ctx().finish();
   ASSERT_EQ(estep.volumeCount(), 3);
+  // Each object's claimed pixels: the bounding rectangle of its q > 0, kept on the device.
+  for (int i = 1; i < 3; ++i) {
+    const cv::Rect expected = positiveBounds(estep.downloadQ(i));
+    EXPECT_GT(expected.area(), 400) << "volume " << i;
+    EXPECT_EQ(estep.claimedPixels(i), expected) << "volume " << i;
+  }
+  EXPECT_THROW(estep.claimedPixels(0), InvalidArgument);
+  EXPECT_THROW(estep.claimedPixels(3), InvalidArgument);
 
   for (int i = 0; i < 3; ++i) {
     const cv::Mat q = estep.downloadQ(i);
@@ -364,6 +388,10 @@ TEST_P(EStepModes, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
     for (int i = 0; i < 3; ++i) {
       EXPECT_TRUE(sameBits(estep.downloadQ(i), q_sampled[static_cast<size_t>(i)]))
           << "volume " << i << " with the objects' likelihoods reused";
+      if (i > 0) {
+        EXPECT_EQ(estep.claimedPixels(i), positiveBounds(q_sampled[static_cast<size_t>(i)]))
+            << "volume " << i;
+      }
     }
     if (em_mode) {
       EXPECT_FALSE(sameBits(estep.downloadQ(0), q_whole[0]));  // the background did move
@@ -404,10 +432,16 @@ TEST_P(EStepModes, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
       EXPECT_EQ(same, ((k.width + stride - 1) / stride) * ((k.height + stride - 1) / stride));
       EXPECT_TRUE(sameBits(estep.downloadQ(1), q_full[1]));
       EXPECT_TRUE(sameBits(estep.downloadQ(2), q_full[2]));
+      // Only the background's q is new: claimedPixels has no object q to bound.
+      EXPECT_THROW(estep.claimedPixels(1), InvalidArgument);
       estep.compute(d_vertex.get(), volumes, false, true);
       EXPECT_TRUE(estep.reusedObjects());
       for (int i = 0; i < 3; ++i) {
         EXPECT_TRUE(sameBits(estep.downloadQ(i), q_full[static_cast<size_t>(i)])) << "volume " << i;
+        if (i > 0) {
+          EXPECT_EQ(estep.claimedPixels(i), positiveBounds(q_full[static_cast<size_t>(i)]))
+              << "volume " << i;
+        }
       }
     }
     EXPECT_THROW(estep.computeBackgroundWeights(d_vertex.get(), volumes, 0), InvalidArgument);
@@ -428,6 +462,8 @@ TEST_P(EStepModes, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
                                  {d_1.view, c_1.get(), host[1].T_volume_camera, {}, cv::Rect()},
                                  {d_2.view, c_2.get(), host[2].T_volume_camera, {}, px_2}});
   EXPECT_EQ(cv::countNonZero(estep.downloadQ(1)), 0);
+  EXPECT_TRUE(estep.claimedPixels(1).empty());
+  EXPECT_EQ(estep.claimedPixels(2), positiveBounds(estep.downloadQ(2)));
   EXPECT_LT(cv::norm(estep.downloadQ(0), q_without_1[0], cv::NORM_INF), kQTolerance);
   EXPECT_LT(cv::norm(estep.downloadQ(2), q_without_1[1], cv::NORM_INF), kQTolerance);
 }

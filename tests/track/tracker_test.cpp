@@ -956,6 +956,64 @@ TEST_F(TrackerTest, RegionOfInterestGivesTheWholeImageResult) {
   EXPECT_EQ(c.loss, TrackLoss::kNoDepth);
 }
 
+TEST_F(TrackerTest, InputsRectangleDropsWorkGroupsAndGivesTheSameBits) {
+  // q > 0 only in a small rectangle inside a large region of interest (an object's claimed
+  // pixels inside its grid's projection): launching only the work-groups of the region's grid
+  // that meet the rectangle must give the same terms and the same track, to the bit, at every
+  // stride (odd corners exercise the cell and group rounding).
+  const core::Intrinsics& k = room_->intrinsics;
+  const PreprocessedFrame frame = preprocessReference(room_->depth, k, PreprocessOptions{});
+  cl::MemHandle vertex =
+      ctx().buffer(CL_MEM_READ_ONLY, frame.vertex.total() * sizeof(cv::Vec4f), frame.vertex.data);
+  const PixelRect roi{5, 3, 301, 233};
+  const PixelRect inputs{131, 97, 197, 151};
+  cv::Mat q(k.height, k.width, CV_32F, cv::Scalar(0.0f));
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> uq(0.05f, 1.0f);
+  for (int v = inputs.y0; v < inputs.y1; ++v) {
+    for (int u = inputs.x0; u < inputs.x1; ++u) q.at<float>(v, u) = uq(rng);
+  }
+  cl::MemHandle qbuf = ctx().buffer(CL_MEM_READ_ONLY, q.total() * sizeof(float), q.data);
+  const Eigen::Isometry3d T = perturb(room_->T_volume_camera_gt, rng, 0.02, 2 * kDeg);
+  const TrackOptions o;
+  Tracker tracker(ctx(), o, k.width, k.height);
+  const auto sameBits = [](const NormalEquations& a, const NormalEquations& b) {
+    return a.H == b.H && a.g == b.g && a.cost == b.cost && a.valid == b.valid &&
+           a.inliers == b.inliers && a.input == b.input && a.max_weight == b.max_weight &&
+           a.cost_change == b.cost_change && a.common == b.common &&
+           a.strict_inliers == b.strict_inliers && a.valid_weight == b.valid_weight;
+  };
+  for (int stride : {1, 2, 3}) {
+    SCOPED_TRACE("stride " + std::to_string(stride));
+    const NormalEquations all =
+        tracker.evaluate(room_->device.view, vertex.get(), qbuf.get(), T, stride, false, &roi);
+    const NormalEquations part = tracker.evaluate(room_->device.view, vertex.get(), qbuf.get(), T,
+                                                  stride, false, &roi, &inputs);
+    ASSERT_GT(all.valid, 100);
+    EXPECT_TRUE(sameBits(all, part));
+    // The groups kept: a third of the region's or fewer.
+    EXPECT_LT(3 * tracker.numGroups(stride, &roi, &inputs), tracker.numGroups(stride, &roi));
+    EXPECT_GT(tracker.numGroups(stride, &roi, &inputs), 0);
+  }
+  const Eigen::Isometry3d start = perturb(room_->T_volume_camera_gt, rng, 0.03, 3 * kDeg);
+  Tracker other(ctx(), o, k.width, k.height);
+  const TrackResult a = other.track(room_->device.view, vertex.get(), qbuf.get(), start, &roi);
+  const TrackResult b =
+      tracker.track(room_->device.view, vertex.get(), qbuf.get(), start, &roi, &inputs);
+  ASSERT_FALSE(a.lost) << a.loss_reason;
+  EXPECT_TRUE(a.T_volume_camera.matrix() == b.T_volume_camera.matrix());
+  EXPECT_EQ(a.iterations, b.iterations);
+  EXPECT_EQ(a.input_pixels, b.input_pixels);
+  EXPECT_EQ(a.cost, b.cost);
+  // No input pixel at all: nothing launched, lost for lack of depth.
+  const PixelRect none{};
+  EXPECT_EQ(tracker.numGroups(1, &roi, &none), 0);
+  const TrackResult c =
+      tracker.track(room_->device.view, vertex.get(), qbuf.get(), start, &roi, &none);
+  EXPECT_TRUE(c.lost);
+  EXPECT_EQ(c.loss, TrackLoss::kNoDepth);
+}
+
 TEST(VolumeImageBounds, HoldsEveryProjectedPointOfTheBoxAndIsTight) {
   const core::Intrinsics k = test::kinectCamera();
   const Eigen::Vector3d extent(0.6, 0.4, 0.5);
