@@ -106,8 +106,9 @@ EStep::EStep(cl::Context& ctx, const EmOptions& options, int width, int height, 
   sum_ = ctx.buffer(CL_MEM_READ_WRITE, bytes);
   best_ = ctx.buffer(CL_MEM_READ_WRITE, bytes);
   residual_ = ctx.buffer(CL_MEM_READ_WRITE, bytes);
-  claimed_ = ctx.buffer(CL_MEM_READ_WRITE, sizeof(cl_int) * 4 * static_cast<size_t>(max_volumes));
-  host_claimed_.assign(4 * static_cast<size_t>(max_volumes), 0);
+  host_claimed_.assign(4 * static_cast<size_t>(max_volumes), std::numeric_limits<cl_int>::max());
+  claimed_ =
+      ctx.buffer(CL_MEM_READ_WRITE, sizeof(cl_int) * host_claimed_.size(), host_claimed_.data());
   likelihood_lanes_ = ctx.kernel("estep", "estep_likelihood_lanes");
   normalize_ = ctx.kernel("estep", "estep_normalize");
   clear_ = ctx.kernel("estep", "estep_clear");
@@ -179,6 +180,15 @@ void EStep::compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes,
   EStepCover cover{};
   if (residual_everywhere) {
     cover.count = -1;
+  } else if (reuse) {
+    // The objects' likelihoods are known: the background's SDF is wanted only where they claim
+    // pixels (elsewhere q_0 is 1 wherever the background's grid holds the point, exact or not).
+    if (!claimed_read_) readClaimed(volumes.size());
+    std::vector<cv::Rect> claimed;
+    for (size_t i = 1; i < volumes.size(); ++i) {
+      claimed.push_back(rects[i].empty() ? cv::Rect() : decodeClaimed(i));
+    }
+    cover = coverOf(claimed);
   } else {
     cover = coverOf(std::vector<cv::Rect>(rects.begin() + 1, rects.end()));
   }
@@ -209,8 +219,6 @@ void EStep::compute(cl_mem vertex_map, const std::vector<EStepVolume>& volumes,
   last_objects_.swap(keys_);
   last_vertex_ = vertex_map;
   reused_ = reuse;
-  // Reused likelihoods keep the rectangles of the pass that sampled them.
-  claimed_read_ = false;
 }
 
 cv::Rect EStep::claimedPixels(int i) {
@@ -219,11 +227,18 @@ cv::Rect EStep::claimedPixels(int i) {
                           std::to_string(count_));
   }
   if (rects_[static_cast<size_t>(i)].empty()) return cv::Rect();  // no pass: q is 0 everywhere
-  if (!claimed_read_) {
-    ctx_.read(claimed_, host_claimed_.data(), sizeof(cl_int) * 4 * static_cast<size_t>(count_));
-    claimed_read_ = true;
-  }
-  const cl_int* c = host_claimed_.data() + 4 * static_cast<size_t>(i);
+  // Reused likelihoods keep the rectangles of the pass that sampled them.
+  if (!claimed_read_) readClaimed(static_cast<size_t>(count_));
+  return decodeClaimed(static_cast<size_t>(i));
+}
+
+void EStep::readClaimed(size_t n) {
+  ctx_.read(claimed_, host_claimed_.data(), sizeof(cl_int) * 4 * n);
+  claimed_read_ = true;
+}
+
+cv::Rect EStep::decodeClaimed(size_t i) const {
+  const cl_int* c = host_claimed_.data() + 4 * i;
   if (c[0] == std::numeric_limits<cl_int>::max()) return cv::Rect();  // no pixel claimed
   return cv::Rect(c[0], c[1], -c[2] - c[0] + 1, -c[3] - c[1] + 1);
 }
@@ -260,6 +275,7 @@ void EStep::enqueueLikelihood(cl_mem vertex_map, const EStepVolume& v, int i, co
                                      sizeof(cl_int) * 4 * static_cast<size_t>(i),
                                      sizeof(cl_int) * 4, 0, nullptr, nullptr));
     cl::countLaunch();
+    claimed_read_ = false;
   }
   // ctx_.lanes() pixels of a row per work item.
   cl::setArgs(likelihood_lanes_, vertex_map, width_, rectArg(grid), rows[0], rows[1], rows[2],

@@ -128,6 +128,10 @@ class EStep {
   void enqueueLikelihood(cl_mem vertex_map, const EStepVolume& v, int i, const cv::Rect& grid,
                          const EStepCover& cover, int stride);
   void enqueueNormalize(int i, const cv::Rect& grid, int stride);
+  // Reads the claimed rectangles of volumes 0 .. n - 1 back (blocking), and decodes volume i's
+  // (empty where its pass claimed nothing).
+  void readClaimed(size_t n);
+  cv::Rect decodeClaimed(size_t i) const;
 
   cl::Context& ctx_;
   EmOptions options_;
@@ -147,7 +151,7 @@ class EStep {
   std::vector<cl::MemHandle> q_, likelihood_;
   cl::MemHandle sum_, best_, residual_;
   // Per volume (min x, min y, -max x, -max y) of its likelihood pass's pixels with a likelihood
-  // above 0 (kernels_cl/estep.cl), and the host's copy once read after the last compute().
+  // above 0 (kernels_cl/estep.cl), and the host's copy once read after the last pass.
   cl::MemHandle claimed_;
   std::vector<cl_int> host_claimed_;
   bool claimed_read_ = false;

@@ -381,10 +381,18 @@ TEST_P(EStepModes, KernelMatchesReferenceAndSeparatesObjectsFromBackground) {
     estep.compute(d_vertex.get(), second, false, false);
     std::vector<cv::Mat> q_sampled;
     for (int i = 0; i < 3; ++i) q_sampled.push_back(estep.downloadQ(i));
+    const int sampled_residuals =
+        cv::countNonZero(estep.downloadResidual() == estep.downloadResidual());
     EXPECT_FALSE(estep.reusedObjects());
     estep.compute(d_vertex.get(), first, false, false);
     estep.compute(d_vertex.get(), second, false, true);
     EXPECT_TRUE(estep.reusedObjects());
+    // Reused, the background's SDF is sampled only where the objects claim pixels (the residual,
+    // NaN where it was not sampled, shows where): fewer pixels than over their rectangles.
+    const int reused_residuals =
+        cv::countNonZero(estep.downloadResidual() == estep.downloadResidual());
+    EXPECT_LT(reused_residuals, sampled_residuals);
+    EXPECT_GT(reused_residuals, 0);
     for (int i = 0; i < 3; ++i) {
       EXPECT_TRUE(sameBits(estep.downloadQ(i), q_sampled[static_cast<size_t>(i)]))
           << "volume " << i << " with the objects' likelihoods reused";
