@@ -110,6 +110,26 @@ class TrackerTest : public test::WithClQueue {
     Preprocessor empty;
     Preprocessor room;
   };
+  // The room's frame (reference preprocessing) with q drawn from [0.05, 1) inside `rect` and 0
+  // elsewhere (an object's pixels), on the host and on the device.
+  struct RectFrame {
+    cv::Mat vertex, q;
+    cl::MemHandle d_vertex, d_q;
+  };
+  RectFrame rectFrame(const PixelRect& rect, std::mt19937& rng) {
+    RectFrame f;
+    const core::Intrinsics& k = room_->intrinsics;
+    f.vertex = preprocessReference(room_->depth, k, PreprocessOptions{}).vertex;
+    f.d_vertex =
+        ctx().buffer(CL_MEM_READ_ONLY, f.vertex.total() * sizeof(cv::Vec4f), f.vertex.data);
+    f.q = cv::Mat(k.height, k.width, CV_32F, cv::Scalar(0.0f));
+    std::uniform_real_distribution<float> uq(0.05f, 1.0f);
+    for (int v = rect.y0; v < rect.y1; ++v) {
+      for (int u = rect.x0; u < rect.x1; ++u) f.q.at<float>(v, u) = uq(rng);
+    }
+    f.d_q = ctx().buffer(CL_MEM_READ_ONLY, f.q.total() * sizeof(float), f.q.data);
+    return f;
+  }
   static std::unique_ptr<SyntheticWorld> room_;
 };
 std::unique_ptr<SyntheticWorld> TrackerTest::room_;
@@ -909,17 +929,12 @@ TEST_F(TrackerTest, RegionOfInterestGivesTheWholeImageResult) {
   // q is zero outside a rectangle (an object's projected box): evaluating only the rectangle
   // must give the whole image's terms, at every stride (odd corners exercise the grid rounding).
   const core::Intrinsics& k = room_->intrinsics;
-  const PreprocessedFrame frame = preprocessReference(room_->depth, k, PreprocessOptions{});
-  cl::MemHandle vertex =
-      ctx().buffer(CL_MEM_READ_ONLY, frame.vertex.total() * sizeof(cv::Vec4f), frame.vertex.data);
   const PixelRect roi{37, 23, 251, 190};
-  cv::Mat q(k.height, k.width, CV_32F, cv::Scalar(0.0f));
   std::mt19937 rng(5);
-  std::uniform_real_distribution<float> uq(0.05f, 1.0f);
-  for (int v = roi.y0; v < roi.y1; ++v) {
-    for (int u = roi.x0; u < roi.x1; ++u) q.at<float>(v, u) = uq(rng);
-  }
-  cl::MemHandle qbuf = ctx().buffer(CL_MEM_READ_ONLY, q.total() * sizeof(float), q.data);
+  const RectFrame frame = rectFrame(roi, rng);
+  const cv::Mat& q = frame.q;
+  const cl::MemHandle& vertex = frame.d_vertex;
+  const cl::MemHandle& qbuf = frame.d_q;
   const Eigen::Isometry3d T = perturb(room_->T_volume_camera_gt, rng, 0.02, 2 * kDeg);
   const TrackOptions o;
   const double delta = o.huber_truncation_factor * room_->host->truncation_m;
@@ -962,18 +977,12 @@ TEST_F(TrackerTest, InputsRectangleDropsWorkGroupsAndGivesTheSameBits) {
   // that meet the rectangle must give the same terms and the same track, to the bit, at every
   // stride (odd corners exercise the cell and group rounding).
   const core::Intrinsics& k = room_->intrinsics;
-  const PreprocessedFrame frame = preprocessReference(room_->depth, k, PreprocessOptions{});
-  cl::MemHandle vertex =
-      ctx().buffer(CL_MEM_READ_ONLY, frame.vertex.total() * sizeof(cv::Vec4f), frame.vertex.data);
   const PixelRect roi{5, 3, 301, 233};
   const PixelRect inputs{131, 97, 197, 151};
-  cv::Mat q(k.height, k.width, CV_32F, cv::Scalar(0.0f));
   std::mt19937 rng(9);
-  std::uniform_real_distribution<float> uq(0.05f, 1.0f);
-  for (int v = inputs.y0; v < inputs.y1; ++v) {
-    for (int u = inputs.x0; u < inputs.x1; ++u) q.at<float>(v, u) = uq(rng);
-  }
-  cl::MemHandle qbuf = ctx().buffer(CL_MEM_READ_ONLY, q.total() * sizeof(float), q.data);
+  const RectFrame frame = rectFrame(inputs, rng);
+  const cl::MemHandle& vertex = frame.d_vertex;
+  const cl::MemHandle& qbuf = frame.d_q;
   const Eigen::Isometry3d T = perturb(room_->T_volume_camera_gt, rng, 0.02, 2 * kDeg);
   const TrackOptions o;
   Tracker tracker(ctx(), o, k.width, k.height);
