@@ -19,9 +19,10 @@
 // (`cover`), the background's q is 1 wherever its grid holds the point, whatever its SDF: unless
 // the residual is wanted there (cover.count < 0), the background's SDF is not sampled there (the
 // likelihood is set to 1 and the residual to NaN). When the objects' likelihoods are reused (see
-// below), the rectangles are those of the pixels they claim (`claimed_rects` of their pass). An object's launches cover only the
-// pixel rectangle its grid projects to (outside it the likelihood is 0 exactly); the host keeps
-// its q at 0 outside that rectangle (estep_clear over the part a previous E-step wrote). When
+// below), the rectangles are those of the pixels they claim (`claimed_rects` of their pass). An
+// object's launches cover only the pixel rectangle its grid projects to (outside it the
+// likelihood is 0 exactly); the host keeps its q at 0 outside that rectangle (estep_clear over
+// the part a previous E-step wrote). When
 // the objects and their poses are those of the previous E-step (the frame's second E-step moves
 // only the background), their stored likelihoods are added with estep_accumulate instead. The
 // camera's E-step wants only q_0 at the pixels the camera tracker reads: its background pass
